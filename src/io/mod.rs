@@ -1,0 +1,1 @@
+//! Writers: VTK particle frames for ParaView, HDF5 frames for h5py, CSV series.

@@ -1,0 +1,20 @@
+//! eddy: wall-induced turbulence on MAC grids and SPH particles.
+//!
+//! The crate is laid out as `../shared/DESIGN.md` describes: `scene` reads and validates scene
+//! files and compiles the stage plan, `geometry` holds obstacles and their motion, `sph` the particle
+//! solvers, `metrics` the per-step diagnostics and probes, `io` the writers, and `run` drives a
+//! scene from its first step to its last frame.
+
+pub mod geometry;
+pub mod io;
+pub mod metrics;
+pub mod run;
+pub mod scene;
+pub mod sph;
+
+/// The one floating-point type of eddy (f64 throughout, see DESIGN.md "Conventions").
+pub type Real = f64;
+/// A 3D vector of [`Real`].
+pub type Vec3 = nalgebra::Vector3<Real>;
+/// A 3D point of [`Real`].
+pub type Point3 = nalgebra::Point3<Real>;

@@ -1,0 +1,1 @@
+//! Drives a scene from its first step to its last frame.

@@ -1,0 +1,1 @@
+//! Smoothed particle hydrodynamics: kernel, neighbour search, pressure solvers, boundaries, viscosity.

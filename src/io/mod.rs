@@ -1,1 +1,22 @@
 //! Writers: VTK particle frames for ParaView, HDF5 frames for h5py, CSV series.
+//!
+//! Every writer is built so that a run killed at any moment leaves readable output: single files
+//! are replaced atomically ([`write_atomic`]), the ParaView series is rewritten after each frame
+//! ([`PvdSeries`]), HDF5 frames appear under their final name only when complete
+//! ([`Hdf5Frames`]), and CSV rows reach the OS one whole row at a time ([`CsvSeries`]).
+
+mod atomic;
+mod csv;
+mod error;
+mod frame;
+mod hdf5_frames;
+mod pvd;
+mod vtk;
+
+pub use atomic::write_atomic;
+pub use csv::CsvSeries;
+pub use error::IoError;
+pub use frame::{Field, FieldData, ParticleFrame};
+pub use hdf5_frames::{AttrValue, Hdf5Frames};
+pub use pvd::PvdSeries;
+pub use vtk::write_particles_vtk;

@@ -1,5 +1,13 @@
 //! Scene files: the TOML schema, loading with overrides, validation, and the stage plan.
 
+pub mod error;
+pub mod load;
+pub mod overrides;
+pub mod plan;
 pub mod schema;
+pub mod validate;
 
+pub use error::SceneError;
+pub use load::{load, parse_str};
+pub use overrides::apply_override;
 pub use schema::*;

@@ -1,1 +1,17 @@
-//! Smoothed particle hydrodynamics: kernel, neighbour search, pressure solvers, boundaries, viscosity.
+//! Smoothed particle hydrodynamics: kernel, neighbour search, pressure solvers (DFSPH, IISPH),
+//! Akinci boundary particles, viscosity.
+
+pub mod boundary;
+pub mod dfsph;
+pub mod fluid;
+pub mod forces;
+pub mod iisph;
+pub mod kernel;
+pub mod neighborhood;
+pub mod neighbors;
+pub mod solver;
+
+pub use kernel::CubicSpline;
+pub use neighborhood::Neighborhood;
+pub use neighbors::{CellGrid, NeighborLists};
+pub use solver::{Instability, SphSolver, StepStats};

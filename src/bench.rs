@@ -1,0 +1,176 @@
+//! `eddy bench`: step time of the SPH solvers on the SPlisHSPlasH 3D dam-break set-up, so the
+//! comparison in the README can be rerun. A cube of water (1 m, n^3 particles) sits in the corner
+//! of a closed 4 x 3 x 1.5 m tank; fixed dt 1.92 ms, cubic kernel, density tolerance 0.05 %,
+//! divergence tolerance 0.1 %, at least 2 iterations, viscosity 0.01. The scene file
+//! `scenes/bench_dam_break.toml` is the same set-up at the 97k size.
+
+use crate::run::{bodies, RunError};
+use crate::scene::{self, PressureSolverKind, Scene};
+use crate::sph::neighbors::{cell_order, CellGrid, NeighborLists};
+use crate::sph::SphSolver;
+use crate::Real;
+use std::path::Path;
+use std::time::Instant;
+
+/// Options of `eddy bench`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchArgs {
+    /// Approximate fluid particle counts (each rounded to a cube n^3).
+    #[arg(long, value_delimiter = ',', default_value = "25000,100000,400000")]
+    pub sizes: Vec<usize>,
+    /// Pressure solvers to time.
+    #[arg(long, value_delimiter = ',', default_value = "dfsph,iisph")]
+    pub solvers: Vec<String>,
+    /// Steps run before timing starts.
+    #[arg(long, default_value_t = 10)]
+    pub warmup: u64,
+    /// Timed steps.
+    #[arg(long, default_value_t = 30)]
+    pub steps: u64,
+}
+
+/// One measured configuration.
+#[derive(Debug, Clone)]
+pub struct BenchResult {
+    pub solver: PressureSolverKind,
+    pub fluid: usize,
+    pub boundary: usize,
+    pub ms_per_step: f64,
+    pub neighbor_ms: f64,
+    pub pressure_iterations: f64,
+    pub bytes_per_particle: f64,
+}
+
+/// The benchmark scene with a cube of `n`^3 fluid particles; at n = 46 it is the reference
+/// set-up exactly (radius 0.0106 m), other sizes scale the spacing so the cube stays ~1 m.
+pub fn dam_break_scene(n: usize, solver: PressureSolverKind) -> Scene {
+    let text = include_str!("../scenes/bench_dam_break.toml");
+    let spacing = 0.0212 * 46.0 / n as Real;
+    let side = n as Real * spacing * (1.0 + 1e-9);
+    let solver = match solver {
+        PressureSolverKind::Dfsph => "dfsph",
+        PressureSolverKind::Iisph => "iisph",
+    };
+    scene::parse_str(
+        text,
+        Path::new("scenes/bench_dam_break.toml"),
+        &[
+            format!("fluid.spacing={spacing}"),
+            format!("fluid.blocks.0.max=[{side}, {side}, {side}]"),
+            format!("pressure.solver=\"{solver}\""),
+        ],
+    )
+    .expect("the built-in benchmark scene is valid")
+}
+
+/// Times `steps` steps after `warmup` steps of one configuration.
+pub fn measure(
+    n: usize,
+    solver: PressureSolverKind,
+    warmup: u64,
+    steps: u64,
+) -> Result<BenchResult, RunError> {
+    let scene = dam_break_scene(n, solver);
+    let mut sph = SphSolver::new(&scene, bodies(&scene)?);
+    let unstable = |cause| RunError::Unstable {
+        cause,
+        frames: 0,
+        out: "(benchmark)".into(),
+    };
+    for _ in 0..warmup {
+        sph.advance().map_err(unstable)?;
+        sph.update_neighborhoods();
+    }
+    let (mut total, mut search, mut iterations) = (0.0, 0.0, 0.0);
+    for _ in 0..steps {
+        let t0 = Instant::now();
+        let stats = sph.advance().map_err(unstable)?;
+        sph.update_neighborhoods();
+        total += t0.elapsed().as_secs_f64();
+        iterations += stats.pressure.iterations as f64;
+        search += time_neighbor_search(&sph);
+    }
+    Ok(BenchResult {
+        solver,
+        fluid: sph.fluid.len(),
+        boundary: sph.boundary.len(),
+        ms_per_step: 1e3 * total / steps as f64,
+        neighbor_ms: 1e3 * search / steps as f64,
+        pressure_iterations: iterations / steps as f64,
+        bytes_per_particle: sph.memory_bytes() as f64 / sph.fluid.len() as f64,
+    })
+}
+
+/// Seconds the neighbour search alone takes on the solver's current state (sort, grid, lists).
+fn time_neighbor_search(sph: &SphSolver) -> f64 {
+    let h = sph.kernel.support();
+    let mut x = sph.fluid.x.clone();
+    let t0 = Instant::now();
+    let perm = cell_order(&x, h);
+    crate::sph::neighbors::permute(&mut x, &perm);
+    let grid = CellGrid::build(&x, h);
+    let ff = NeighborLists::build(&x, &grid, &x, &grid, h, true);
+    let fb = NeighborLists::build(&x, &grid, &sph.boundary.x, &sph.boundary.grid, h, false);
+    let seconds = t0.elapsed().as_secs_f64();
+    std::hint::black_box((ff, fb));
+    seconds
+}
+
+/// Peak resident memory of this process, bytes (Linux; None elsewhere).
+pub fn peak_rss() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Runs `eddy bench` and prints a table.
+pub fn run(args: &BenchArgs) -> Result<(), RunError> {
+    println!(
+        "SPH dam break (SPlisHSPlasH set-up), {} threads, {} warm-up + {} timed steps, dt 1.92 ms",
+        rayon::current_num_threads(),
+        args.warmup,
+        args.steps
+    );
+    println!(
+        "{:<6} {:>9} {:>9} {:>10} {:>11} {:>8} {:>12} {:>10}",
+        "solver",
+        "fluid",
+        "boundary",
+        "ms/step",
+        "search ms",
+        "p-iters",
+        "M p-steps/s",
+        "B/particle"
+    );
+    for &size in &args.sizes {
+        let n = (size as f64).cbrt().round().max(4.0) as usize;
+        for name in &args.solvers {
+            let solver = match name.as_str() {
+                "dfsph" => PressureSolverKind::Dfsph,
+                "iisph" => PressureSolverKind::Iisph,
+                other => {
+                    return Err(RunError::Unsupported(format!(
+                        "--solvers: unknown solver '{other}' (allowed: dfsph, iisph)"
+                    )))
+                }
+            };
+            let r = measure(n, solver, args.warmup, args.steps)?;
+            println!(
+                "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>8.1} {:>12.3} {:>10.0}",
+                name,
+                r.fluid,
+                r.boundary,
+                r.ms_per_step,
+                r.neighbor_ms,
+                r.pressure_iterations,
+                r.fluid as f64 / r.ms_per_step / 1e3,
+                r.bytes_per_particle
+            );
+        }
+    }
+    if let Some(rss) = peak_rss() {
+        println!("peak resident memory: {:.1} MiB", rss as f64 / 1048576.0);
+    }
+    Ok(())
+}

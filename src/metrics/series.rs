@@ -1,0 +1,76 @@
+//! `metrics.csv`: step, time, dt and the metrics the scene asks for, one row per step.
+
+use crate::io::{CsvSeries, IoError};
+use crate::scene::Metric;
+use crate::sph::{SphSolver, StepStats};
+use crate::{Real, Vec3};
+use std::path::Path;
+
+/// Writes the requested metrics of each step.
+pub struct MetricsRecorder {
+    metrics: Vec<Metric>,
+    csv: CsvSeries,
+    row: Vec<Real>,
+}
+
+/// The state-dependent metrics of one step, measured before the step advances the state.
+#[derive(Debug, Clone, Default)]
+pub struct StateMetrics {
+    values: Vec<Real>,
+}
+
+impl MetricsRecorder {
+    /// Creates `path` with the header for `metrics`.
+    pub fn create(path: &Path, metrics: &[Metric]) -> Result<Self, IoError> {
+        let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
+        columns.extend(metrics.iter().map(|m| m.column().to_string()));
+        Ok(Self {
+            metrics: metrics.to_vec(),
+            csv: CsvSeries::create(path, &columns)?,
+            row: Vec::with_capacity(columns.len()),
+        })
+    }
+
+    /// Measures the state of `solver` (call before it advances); only requested metrics run.
+    pub fn measure(&self, solver: &SphSolver, gravity: &Vec3) -> StateMetrics {
+        let fluid = &solver.fluid;
+        let mut errors = None;
+        let mut density_errors = || {
+            *errors.get_or_insert_with(|| super::density_errors(&fluid.density, fluid.rest_density))
+        };
+        let values = self
+            .metrics
+            .iter()
+            .map(|m| match m {
+                Metric::KineticEnergy => super::kinetic_energy(fluid.mass, &fluid.v),
+                Metric::PotentialEnergy => super::potential_energy(fluid.mass, &fluid.x, gravity),
+                Metric::DensityErrorAvg => density_errors().0,
+                Metric::DensityErrorMax => density_errors().1,
+                Metric::MaxSpeed => super::max_speed(&fluid.v),
+                // Filled in from the step's statistics in `write`.
+                Metric::PressureIterations | Metric::DivergenceIterations => 0.0,
+            })
+            .collect();
+        StateMetrics { values }
+    }
+
+    /// Writes the row of a step: the state it started from and what the step did.
+    pub fn write(
+        &mut self,
+        step: u64,
+        time: Real,
+        state: &StateMetrics,
+        stats: &StepStats,
+    ) -> Result<(), IoError> {
+        self.row.clear();
+        self.row.extend([step as Real, time, stats.dt]);
+        for (m, v) in self.metrics.iter().zip(&state.values) {
+            self.row.push(match m {
+                Metric::PressureIterations => stats.pressure.iterations as Real,
+                Metric::DivergenceIterations => stats.divergence.iterations as Real,
+                _ => *v,
+            });
+        }
+        self.csv.row(&self.row)
+    }
+}

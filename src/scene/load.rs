@@ -1,0 +1,269 @@
+//! Reading a scene: TOML syntax, `--set` overrides, the schema, mesh paths, then validation, each
+//! step with errors that point at the file, line and key.
+
+use std::path::{Path, PathBuf};
+
+use toml::de::DeValue;
+use toml::{Spanned, Table};
+
+use super::overrides::apply_override;
+use super::{Body, Scene, SceneError, Shape};
+
+/// Reads, overrides, checks and validates the scene file at `path`.
+///
+/// `overrides` are `dotted.key=value` assignments as given to `eddy run --set`, applied in order.
+/// Relative mesh paths come back absolute, resolved against the scene file's folder.
+pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        file: path.to_owned(),
+        source,
+    })?;
+    parse_str(&text, path, overrides)
+}
+
+/// Like [`load`] for a scene already in memory; `origin` is the file name used in messages and
+/// the base of relative mesh paths (it need not exist).
+pub fn parse_str(text: &str, origin: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
+    // Parse to a plain table first so a syntax error is told apart from a schema error.
+    let mut table: Table = toml::from_str(text).map_err(|e| syntax_error(origin, text, &e))?;
+    let mut scene = if overrides.is_empty() {
+        // Deserialize the user's own text so schema errors carry its line numbers.
+        deserialize(text, origin, true)?
+    } else {
+        for assignment in overrides {
+            apply_override(&mut table, assignment)?;
+        }
+        let rendered = toml::to_string(&table).map_err(|e| SceneError::Override {
+            arg: overrides.join(" "),
+            reason: format!("the overridden scene cannot be written as TOML: {e}"),
+        })?;
+        // Line numbers in the rendered text would mean nothing to the user: keep only the key.
+        deserialize(&rendered, origin, false)?
+    };
+    resolve_mesh_paths(&mut scene, origin);
+    scene.validate(origin)?;
+    Ok(scene)
+}
+
+impl Scene {
+    /// The resolved scene (defaults filled in, mesh paths absolute) as TOML, written next to a
+    /// run's outputs so the run can be repeated exactly. [`parse_str`] reads it back equal.
+    ///
+    /// Falls back to a TOML comment naming the problem in the one case the scene cannot be
+    /// written (a `seed` above `i64::MAX` or a non-UTF-8 path); see [`Scene::try_to_toml`].
+    pub fn to_toml(&self) -> String {
+        self.try_to_toml()
+            .unwrap_or_else(|e| format!("# the resolved scene could not be written: {e}\n"))
+    }
+
+    /// [`Scene::to_toml`], with the serializer's error for a scene TOML cannot hold.
+    pub fn try_to_toml(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
+    }
+}
+
+/// The syntax error of `toml` with a 1-based line and column.
+fn syntax_error(file: &Path, text: &str, error: &toml::de::Error) -> SceneError {
+    let offset = error.span().map_or(text.len(), |span| span.start);
+    let (line, column) = line_col(text, offset);
+    SceneError::Syntax {
+        file: file.to_owned(),
+        line,
+        column,
+        message: error.message().to_owned(),
+    }
+}
+
+/// Deserializes a (syntactically valid) document into a [`Scene`]; `located` says whether
+/// `text` is the user's file, so that its line numbers are worth reporting.
+fn deserialize(text: &str, file: &Path, located: bool) -> Result<Scene, SceneError> {
+    toml::from_str::<Scene>(text).map_err(|error| {
+        let message = key_wording(error.message());
+        let (key, offset) = match error.span() {
+            Some(span) if !span.is_empty() => locate(text, span, error.message()),
+            // serde reports a missing top-level key with an empty span.
+            _ => (String::new(), None),
+        };
+        SceneError::Schema {
+            file: file.to_owned(),
+            key,
+            location: offset.filter(|_| located).map(|o| line_col(text, o)),
+            message,
+        }
+    })
+}
+
+/// serde says "field" where a TOML user says "key".
+fn key_wording(message: &str) -> String {
+    for (serde, user) in [
+        ("unknown field ", "unknown key "),
+        ("missing field ", "missing key "),
+    ] {
+        if let Some(rest) = message.strip_prefix(serde) {
+            return format!("{user}{rest}");
+        }
+    }
+    message.to_owned()
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text.as_bytes()[..offset.min(text.len())];
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |nl| nl + 1);
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let tail = &before[line_start..];
+    let column = std::str::from_utf8(tail).map_or(tail.len(), |s| s.chars().count()) + 1;
+    (line, column)
+}
+
+/// One step of a key path.
+#[derive(Clone)]
+enum Segment {
+    Key(String),
+    Index(usize),
+}
+
+/// Renders a key path as `fluid.blocks[0].max`, quoting keys that are not bare TOML keys.
+fn render_path(path: &[Segment]) -> String {
+    let mut out = String::new();
+    for segment in path {
+        match segment {
+            Segment::Key(key) => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                let bare = !key.is_empty()
+                    && key
+                        .chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+                if bare {
+                    out.push_str(key);
+                } else {
+                    out.push_str(&format!("{key:?}"));
+                }
+            }
+            Segment::Index(index) => out.push_str(&format!("[{index}]")),
+        }
+    }
+    out
+}
+
+/// The best node found so far for an error span.
+struct Found<'t, 'i> {
+    path: Vec<Segment>,
+    value: &'t DeValue<'i>,
+    /// Whether the node's key or value span is the error span itself.
+    exact: bool,
+}
+
+/// The dotted key an error at byte range `span` of `text` belongs to, and the offset to report.
+///
+/// serde errors carry only a byte span; the key is found by walking the spanned document for
+/// the deepest key or value whose span is the error span, or failing that holds its start.
+/// Table headers span only the header line, so the whole tree is searched rather than just the
+/// containing branch, and an implicit table shares its span with the header that made it, hence
+/// exact matches first. When the error names an unknown key or variant inside the table found,
+/// the path is narrowed to it.
+fn locate(text: &str, span: std::ops::Range<usize>, message: &str) -> (String, Option<usize>) {
+    let mut offset = span.start;
+    let Ok(root) = toml::de::DeTable::parse(text) else {
+        return (String::new(), Some(offset));
+    };
+    let root = DeValue::Table(root.into_inner());
+    let mut best: Option<Found> = None;
+    search(&root, &span, &mut Vec::new(), &mut best);
+    let Some(mut found) = best else {
+        return (String::new(), Some(offset));
+    };
+    if let DeValue::Table(table) = found.value {
+        let named = quoted_name(message, "unknown field ");
+        let variant = quoted_name(message, "unknown variant ");
+        let child = table.iter().find(|(k, v)| {
+            named == Some(k.get_ref().as_ref())
+                || (variant.is_some() && v.get_ref().as_str() == variant)
+        });
+        if let Some((key, _)) = child {
+            found.path.push(Segment::Key(key.get_ref().to_string()));
+            offset = key.span().start;
+        }
+    }
+    (render_path(&found.path), Some(offset))
+}
+
+/// The name in backticks after `prefix` at the start of a serde message.
+fn quoted_name<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
+    let rest = message.strip_prefix(prefix)?.strip_prefix('`')?;
+    rest.split_once('`').map(|(name, _)| name)
+}
+
+fn search<'t, 'i>(
+    value: &'t DeValue<'i>,
+    span: &std::ops::Range<usize>,
+    path: &mut Vec<Segment>,
+    best: &mut Option<Found<'t, 'i>>,
+) {
+    let mut visit = |segment: Segment,
+                     spans: &[std::ops::Range<usize>],
+                     child: &'t Spanned<DeValue<'i>>,
+                     path: &mut Vec<Segment>| {
+        path.push(segment);
+        let exact = spans.contains(span);
+        let holds = spans
+            .iter()
+            .any(|s| s.start <= span.start && span.start < s.end);
+        // Rank by (exact, depth): an exact match beats any mere container.
+        let better = best
+            .as_ref()
+            .is_none_or(|b| (exact, path.len()) > (b.exact, b.path.len()));
+        if (exact || holds) && better {
+            *best = Some(Found {
+                path: path.clone(),
+                value: child.get_ref(),
+                exact,
+            });
+        }
+        search(child.get_ref(), span, path, best);
+        path.pop();
+    };
+    match value {
+        DeValue::Table(table) => {
+            for (key, child) in table.iter() {
+                let segment = Segment::Key(key.get_ref().to_string());
+                visit(segment, &[key.span(), child.span()], child, path);
+            }
+        }
+        DeValue::Array(array) => {
+            for (index, child) in array.iter().enumerate() {
+                visit(Segment::Index(index), &[child.span()], child, path);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Makes relative mesh paths absolute against the scene file's folder, so the run does not
+/// depend on the working directory.
+fn resolve_mesh_paths(scene: &mut Scene, origin: &Path) {
+    let base = base_dir(origin);
+    let bodies = scene.container.iter_mut().chain(scene.obstacles.iter_mut());
+    for Body { shape, .. } in bodies {
+        if let Shape::Mesh { path, .. } = shape {
+            if path.is_relative() {
+                *path = base.join(&*path);
+            }
+        }
+    }
+}
+
+/// The absolute folder of the scene file (the working directory for a bare file name).
+pub(super) fn base_dir(origin: &Path) -> PathBuf {
+    let dir = origin.parent().unwrap_or(Path::new(""));
+    if dir.as_os_str().is_empty() {
+        std::env::current_dir().unwrap_or_default()
+    } else {
+        std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
+    }
+}

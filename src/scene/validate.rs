@@ -1,0 +1,445 @@
+//! Range and consistency checks of a deserialized scene. The schema only knows types; these rules
+//! catch the values that would make a run blow up or silently mean nothing, before it starts.
+
+use std::collections::HashSet;
+use std::fmt;
+use std::path::Path;
+
+use super::load::base_dir;
+use super::{Body, Domain, Motion, Probe, Scene, SceneError, Shape};
+use crate::Real;
+
+/// Largest `pressure.max_iterations`: beyond it a solve that does not converge never ends in
+/// practice.
+const MAX_ITERATIONS: u32 = 100_000;
+
+impl Scene {
+    /// Checks every value against its allowed range; `file` is named in the error. The first
+    /// problem found is returned.
+    pub fn validate(&self, file: &Path) -> Result<(), SceneError> {
+        let c = Checker { file };
+        c.vec3("gravity", self.gravity)?;
+        c.domain(&self.domain)?;
+        self.validate_time(&c)?;
+        if let Some(fluid) = &self.fluid {
+            let extent = (0..3)
+                .map(|i| self.domain.max[i] - self.domain.min[i])
+                .fold(Real::INFINITY, Real::min);
+            c.num("fluid.spacing", fluid.spacing, Interval::gt(0.0))?;
+            c.num(
+                "fluid.spacing",
+                fluid.spacing,
+                Interval::le(extent / 4.0).note("a quarter of the smallest domain extent"),
+            )?;
+            c.num("fluid.density", fluid.density, Interval::gt(0.0))?;
+            if fluid.blocks.is_empty() {
+                return Err(c.invalid("fluid.blocks", "[]", "at least one block"));
+            }
+            for (i, block) in fluid.blocks.iter().enumerate() {
+                let key = format!("fluid.blocks[{i}]");
+                c.inside_box(&key, block.min, block.max, &self.domain)?;
+                c.vec3(&format!("{key}.velocity"), block.velocity)?;
+            }
+        }
+        let bodies = self
+            .container
+            .iter()
+            .map(|b| ("container".to_owned(), b))
+            .chain(
+                self.obstacles
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| (format!("obstacles[{i}]"), b)),
+            );
+        let mut body_names: Vec<(&str, String)> = Vec::new();
+        for (key, body) in bodies {
+            c.body(&key, body)?;
+            if let Some(name) = &body.name {
+                if let Some((_, first)) = body_names.iter().find(|(n, _)| *n == name.as_str()) {
+                    return Err(c.invalid(
+                        format!("{key}.name"),
+                        format!("{name:?}"),
+                        format!("a name no other body has (`{first}.name` has it)"),
+                    ));
+                }
+                body_names.push((name, key));
+            }
+        }
+        self.validate_solvers(&c)?;
+        self.validate_probes(&c)?;
+        c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
+        let mut metrics = HashSet::new();
+        for (i, metric) in self.output.metrics.iter().enumerate() {
+            if !metrics.insert(metric) {
+                return Err(c.invalid(
+                    format!("output.metrics[{i}]"),
+                    format!("{:?}", metric.column()),
+                    "each metric at most once",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_time(&self, c: &Checker) -> Result<(), SceneError> {
+        let time = &self.time;
+        match (time.end, time.steps) {
+            (Some(end), None) => c.num("time.end", end, Interval::gt(0.0))?,
+            (None, Some(steps)) => {
+                if steps < 1 {
+                    return Err(c.invalid("time.steps", steps, ">= 1"));
+                }
+            }
+            (Some(_), Some(_)) => {
+                return Err(c.invalid(
+                    "time.end, time.steps",
+                    "both given",
+                    "exactly one of `time.end` and `time.steps`",
+                ))
+            }
+            (None, None) => {
+                return Err(c.invalid(
+                    "time.end, time.steps",
+                    "neither given",
+                    "exactly one of `time.end` (> 0, s) and `time.steps` (>= 1)",
+                ))
+            }
+        }
+        c.num("time.cfl", time.cfl, Interval::open_closed(0.0, 1.0))?;
+        c.num("time.dt_min", time.dt_min, Interval::gt(0.0))?;
+        c.num(
+            "time.dt_max",
+            time.dt_max,
+            Interval::ge(time.dt_min).note("`time.dt_min`"),
+        )?;
+        if let Some(dt) = time.dt {
+            c.num(
+                "time.dt",
+                dt,
+                Interval::closed(time.dt_min, time.dt_max)
+                    .note("from `time.dt_min` to `time.dt_max`"),
+            )?;
+        }
+        Ok(())
+    }
+
+    fn validate_solvers(&self, c: &Checker) -> Result<(), SceneError> {
+        let p = &self.pressure;
+        c.num(
+            "pressure.density_tolerance",
+            p.density_tolerance,
+            Interval::open_closed(0.0, 0.1),
+        )?;
+        c.num(
+            "pressure.divergence_tolerance",
+            p.divergence_tolerance,
+            Interval::open_closed(0.0, 1.0),
+        )?;
+        c.num(
+            "pressure.max_iterations",
+            Real::from(p.max_iterations),
+            Interval::closed(1.0, Real::from(MAX_ITERATIONS)),
+        )?;
+        c.num(
+            "pressure.min_iterations",
+            Real::from(p.min_iterations),
+            Interval::closed(1.0, Real::from(p.max_iterations))
+                .note("1 to `pressure.max_iterations`"),
+        )?;
+        let v = &self.viscosity;
+        c.num("viscosity.kinematic", v.kinematic, Interval::ge(0.0))?;
+        c.num("viscosity.boundary", v.boundary, Interval::ge(0.0))?;
+        c.num("viscosity.xsph", v.xsph, Interval::closed(0.0, 1.0))?;
+        Ok(())
+    }
+
+    fn validate_probes(&self, c: &Checker) -> Result<(), SceneError> {
+        let mut names: Vec<&str> = Vec::new();
+        for (i, probe) in self.probes.iter().enumerate() {
+            let key = format!("probes[{i}]");
+            let name = probe.name();
+            let well_formed = !name.is_empty()
+                && name
+                    .chars()
+                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+            if !well_formed {
+                return Err(c.invalid(
+                    format!("{key}.name"),
+                    format!("{name:?}"),
+                    "a non-empty name of A-Z, a-z, 0-9 and _ (it names CSV columns)",
+                ));
+            }
+            if let Some(first) = names.iter().position(|n| *n == name) {
+                return Err(c.invalid(
+                    format!("{key}.name"),
+                    format!("{name:?}"),
+                    format!("a name no other probe has (`probes[{first}].name` has it)"),
+                ));
+            }
+            names.push(name);
+            match probe {
+                Probe::Front { origin, .. } => {
+                    c.num(&format!("{key}.origin"), *origin, Interval::any())?;
+                }
+                Probe::Point { position, .. } => {
+                    for (axis, &x) in position.iter().enumerate() {
+                        c.num(
+                            &format!("{key}.position[{axis}]"),
+                            x,
+                            Interval::closed(self.domain.min[axis], self.domain.max[axis])
+                                .note("inside the domain"),
+                        )?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Builds the errors of one file, so each rule is one line.
+struct Checker<'a> {
+    file: &'a Path,
+}
+
+impl Checker<'_> {
+    fn invalid(
+        &self,
+        key: impl Into<String>,
+        value: impl fmt::Display,
+        allowed: impl Into<String>,
+    ) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.to_owned(),
+            key: key.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+
+    /// Checks that `value` is finite and inside `allowed`.
+    fn num(&self, key: &str, value: Real, allowed: Interval) -> Result<(), SceneError> {
+        if value.is_finite() && allowed.contains(value) {
+            Ok(())
+        } else {
+            Err(self.invalid(key, value, allowed.describe(!value.is_finite())))
+        }
+    }
+
+    fn vec3(&self, key: &str, v: [Real; 3]) -> Result<(), SceneError> {
+        for (axis, &x) in v.iter().enumerate() {
+            self.num(&format!("{key}[{axis}]"), x, Interval::any())?;
+        }
+        Ok(())
+    }
+
+    fn domain(&self, domain: &Domain) -> Result<(), SceneError> {
+        self.vec3("domain.min", domain.min)?;
+        self.vec3("domain.max", domain.max)?;
+        for axis in 0..3 {
+            self.num(
+                &format!("domain.max[{axis}]"),
+                domain.max[axis],
+                Interval::gt(domain.min[axis]).note(&format!("`domain.min[{axis}]`")),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// A box given by corners `min` < `max`, inside the domain.
+    fn inside_box(
+        &self,
+        key: &str,
+        min: [Real; 3],
+        max: [Real; 3],
+        domain: &Domain,
+    ) -> Result<(), SceneError> {
+        for axis in 0..3 {
+            let domain_axis =
+                || Interval::closed(domain.min[axis], domain.max[axis]).note("inside the domain");
+            self.num(&format!("{key}.min[{axis}]"), min[axis], domain_axis())?;
+            self.num(&format!("{key}.max[{axis}]"), max[axis], domain_axis())?;
+            self.num(
+                &format!("{key}.max[{axis}]"),
+                max[axis],
+                Interval::gt(min[axis]).note(&format!("`{key}.min[{axis}]`")),
+            )?;
+        }
+        Ok(())
+    }
+
+    fn body(&self, key: &str, body: &Body) -> Result<(), SceneError> {
+        if body.name.as_deref() == Some("") {
+            return Err(self.invalid(format!("{key}.name"), "\"\"", "a non-empty name"));
+        }
+        self.shape(&format!("{key}.shape"), &body.shape)?;
+        self.vec3(&format!("{key}.position"), body.position)?;
+        self.vec3(&format!("{key}.rotation"), body.rotation)?;
+        self.motion(&format!("{key}.motion"), &body.motion)
+    }
+
+    fn shape(&self, key: &str, shape: &Shape) -> Result<(), SceneError> {
+        let positive =
+            |name: &str, v: Real| self.num(&format!("{key}.{name}"), v, Interval::gt(0.0));
+        match shape {
+            Shape::Box { half_extents } => {
+                for (axis, &h) in half_extents.iter().enumerate() {
+                    positive(&format!("half_extents[{axis}]"), h)?;
+                }
+            }
+            Shape::Sphere { radius } => positive("radius", *radius)?,
+            Shape::Cylinder {
+                radius,
+                half_height,
+            }
+            | Shape::Capsule {
+                radius,
+                half_height,
+            } => {
+                positive("radius", *radius)?;
+                positive("half_height", *half_height)?;
+            }
+            Shape::Mesh { path, scale } => {
+                positive("scale", *scale)?;
+                // `load` made the path absolute; resolve again for scenes built in code.
+                let resolved = base_dir(self.file).join(path);
+                if !resolved.is_file() {
+                    return Err(SceneError::MissingMesh {
+                        file: self.file.to_owned(),
+                        key: format!("{key}.path"),
+                        path: resolved,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn motion(&self, key: &str, motion: &Motion) -> Result<(), SceneError> {
+        self.vec3(&format!("{key}.linear"), motion.linear)?;
+        self.vec3(&format!("{key}.angular"), motion.angular)?;
+        if motion.keyframes.len() == 1 {
+            return Err(self.invalid(
+                format!("{key}.keyframes"),
+                "1 keyframe",
+                "none, or at least 2",
+            ));
+        }
+        let mut previous: Option<Real> = None;
+        for (i, frame) in motion.keyframes.iter().enumerate() {
+            let k = format!("{key}.keyframes[{i}]");
+            let allowed = match previous {
+                Some(t) => Interval::gt(t).note(&format!(
+                    "`{key}.keyframes[{}].t` (times strictly increasing)",
+                    i - 1
+                )),
+                None => Interval::any(),
+            };
+            self.num(&format!("{k}.t"), frame.t, allowed)?;
+            self.vec3(&format!("{k}.position"), frame.position)?;
+            self.vec3(&format!("{k}.rotation"), frame.rotation)?;
+            previous = Some(frame.t);
+        }
+        Ok(())
+    }
+}
+
+/// One end of an interval.
+#[derive(Clone, Copy)]
+enum Bound {
+    Open(Real),
+    Closed(Real),
+    Unbounded,
+}
+
+/// An allowed range of a number, with an optional note on where its ends come from.
+struct Interval {
+    lo: Bound,
+    hi: Bound,
+    note: Option<String>,
+}
+
+impl Interval {
+    fn new(lo: Bound, hi: Bound) -> Self {
+        Self { lo, hi, note: None }
+    }
+    fn any() -> Self {
+        Self::new(Bound::Unbounded, Bound::Unbounded)
+    }
+    fn gt(lo: Real) -> Self {
+        Self::new(Bound::Open(lo), Bound::Unbounded)
+    }
+    fn ge(lo: Real) -> Self {
+        Self::new(Bound::Closed(lo), Bound::Unbounded)
+    }
+    fn le(hi: Real) -> Self {
+        Self::new(Bound::Unbounded, Bound::Closed(hi))
+    }
+    fn open_closed(lo: Real, hi: Real) -> Self {
+        Self::new(Bound::Open(lo), Bound::Closed(hi))
+    }
+    fn closed(lo: Real, hi: Real) -> Self {
+        Self::new(Bound::Closed(lo), Bound::Closed(hi))
+    }
+    /// Says where a bound comes from, e.g. "`domain.min[0]`".
+    fn note(mut self, note: &str) -> Self {
+        self.note = Some(note.to_owned());
+        self
+    }
+
+    fn contains(&self, v: Real) -> bool {
+        let above = match self.lo {
+            Bound::Open(lo) => v > lo,
+            Bound::Closed(lo) => v >= lo,
+            Bound::Unbounded => true,
+        };
+        let below = match self.hi {
+            Bound::Open(hi) => v < hi,
+            Bound::Closed(hi) => v <= hi,
+            Bound::Unbounded => true,
+        };
+        above && below
+    }
+
+    /// The allowed range in words: `(0, 1]`, `> 0`, `a finite number >= 0`.
+    fn describe(&self, say_finite: bool) -> String {
+        let range = match (self.lo, self.hi) {
+            (Bound::Unbounded, Bound::Unbounded) => String::new(),
+            (Bound::Open(lo), Bound::Unbounded) => format!("> {lo}"),
+            (Bound::Closed(lo), Bound::Unbounded) => format!(">= {lo}"),
+            (Bound::Unbounded, Bound::Open(hi)) => format!("< {hi}"),
+            (Bound::Unbounded, Bound::Closed(hi)) => format!("<= {hi}"),
+            (lo, hi) => {
+                let (open, a) = match lo {
+                    Bound::Open(a) => ('(', a),
+                    Bound::Closed(a) => ('[', a),
+                    Bound::Unbounded => ('(', Real::NEG_INFINITY),
+                };
+                let (close, b) = match hi {
+                    Bound::Open(b) => (')', b),
+                    Bound::Closed(b) => (']', b),
+                    Bound::Unbounded => (')', Real::INFINITY),
+                };
+                format!("{open}{a}, {b}{close}")
+            }
+        };
+        let mut out = match (say_finite || range.is_empty(), range.is_empty()) {
+            (true, true) => "a finite number".to_owned(),
+            (true, false) => format!("a finite number {}", in_words(&range)),
+            (false, _) => range,
+        };
+        if let Some(note) = &self.note {
+            out.push_str(&format!(" ({note})"));
+        }
+        out
+    }
+}
+
+/// "in [a, b]" for an interval, the comparison itself otherwise.
+fn in_words(range: &str) -> String {
+    if range.starts_with(['(', '[']) {
+        format!("in {range}")
+    } else {
+        range.to_owned()
+    }
+}

@@ -1,0 +1,135 @@
+//! Divergence-free SPH (Bender & Koschier 2015, 2017): two Jacobi-style solvers that share one
+//! iteration. Each computes a stiffness kappa_i = e_i * factor_i / dt^2 from a per-particle error
+//! e_i (in density-ratio units over one step), changes the velocities by the symmetric pressure
+//! gradient of kappa, and recomputes the error, until the average error is under tolerance.
+//!
+//! - divergence solve: e_i = dt * max(D rho_i / Dt / rho_0, 0), so the velocity field becomes
+//!   divergence free;
+//! - density solve: e_i = max(rho_i / rho_0 + dt D rho_i / Dt / rho_0 - 1, 0), so the density
+//!   predicted after the step is the rest density.
+//!
+//! Both warm-start from half the stiffness of the previous step (stored as kappa dt^2, which
+//! does not depend on the step size).
+
+use super::neighborhood::Neighborhood;
+use crate::{Real, Vec3};
+use rayon::prelude::*;
+
+/// Below this many neighbours a particle is at the free surface and the divergence solver leaves
+/// it alone: its density deficit would read as expansion (the choice SPlisHSPlasH makes for 3D).
+pub const MIN_NEIGHBORS_FOR_DIVERGENCE: usize = 20;
+
+/// Which of the two DFSPH solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Solve {
+    Divergence,
+    Density,
+}
+
+/// Outcome of one solve.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SolveResult {
+    pub iterations: u32,
+    /// Average error left, in density-ratio units.
+    pub error: Real,
+}
+
+/// Tolerance and iteration bounds of a solve.
+#[derive(Debug, Clone, Copy)]
+pub struct Bounds {
+    pub tolerance: Real,
+    pub min_iterations: u32,
+    pub max_iterations: u32,
+}
+
+/// Runs one DFSPH solve on the velocities `v`. `density_ratio` is rho / rho_0 from the current
+/// neighbourhood, `factor` the DFSPH factors, `warm` the stored kappa dt^2 of this solve (read
+/// for the warm start and overwritten with this step's total).
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    nb: &Neighborhood,
+    which: Solve,
+    density_ratio: &[Real],
+    factor: &[Real],
+    v: &mut [Vec3],
+    warm: &mut [Real],
+    dt: Real,
+    bounds: Bounds,
+) -> SolveResult {
+    let n = v.len();
+    let error = |i: usize, v: &[Vec3]| -> Real {
+        match which {
+            Solve::Divergence => {
+                if nb.count(i) < MIN_NEIGHBORS_FOR_DIVERGENCE {
+                    0.0
+                } else {
+                    (dt * nb.density_rate(i, v, false)).max(0.0)
+                }
+            }
+            Solve::Density => (density_ratio[i] + dt * nb.density_rate(i, v, false) - 1.0).max(0.0),
+        }
+    };
+    let inv_dt2 = 1.0 / (dt * dt);
+    let mut err: Vec<Real> = (0..n).into_par_iter().map(|i| error(i, v)).collect();
+    // Warm start: half of last step's stiffness where the particle is compressed now.
+    let mut kappa: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if err[i] > 0.0 {
+                0.5 * warm[i] * inv_dt2
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut total = kappa.clone();
+    if kappa.iter().any(|&k| k != 0.0) {
+        apply(nb, &kappa, v, dt);
+        err.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, e)| *e = error(i, v));
+    }
+    let mut avg = mean_positive(&err);
+    let mut iterations = 0;
+    while iterations < bounds.max_iterations
+        && (iterations < bounds.min_iterations || avg > bounds.tolerance)
+    {
+        kappa
+            .par_iter_mut()
+            .zip(total.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (k, t))| {
+                *k = err[i] * factor[i] * inv_dt2;
+                *t += *k;
+            });
+        apply(nb, &kappa, v, dt);
+        err.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, e)| *e = error(i, v));
+        avg = mean_positive(&err);
+        iterations += 1;
+    }
+    warm.par_iter_mut()
+        .zip(total.par_iter())
+        .for_each(|(w, t)| *w = t * dt * dt);
+    SolveResult {
+        iterations,
+        error: avg,
+    }
+}
+
+/// v_i += dt * (pressure acceleration of the stiffness field kappa).
+pub fn apply(nb: &Neighborhood, kappa: &[Real], v: &mut [Vec3], dt: Real) {
+    v.par_iter_mut()
+        .enumerate()
+        .for_each(|(i, vi)| *vi += dt * nb.stiffness_acceleration(i, kappa));
+}
+
+/// Mean of the positive parts of a slice (zero when empty): the average compression.
+pub fn mean_positive(values: &[Real]) -> Real {
+    if values.is_empty() {
+        0.0
+    } else {
+        values.par_iter().map(|v| v.max(0.0)).sum::<Real>() / values.len() as Real
+    }
+}

@@ -1,0 +1,272 @@
+//! Neighbour search on a compact hashed uniform grid (after Ihmsen et al. 2011).
+//!
+//! Points are sorted by the Morton (z-order) code of their cell, so that particles close in space
+//! are close in memory. The non-empty cells form a compact list, each a range of the sorted
+//! points, and an open-addressing hash table maps a cell's code to its place in that list. The
+//! 27 cells around a cell are looked up once per cell, not once per particle. Neighbour lists are
+//! built in parallel, cell chunk by cell chunk, into one compressed-row (CSR) array of `u32`.
+
+use crate::{Real, Vec3};
+use rayon::prelude::*;
+
+/// Bias that makes cell coordinates non-negative for the 21-bit-per-axis Morton code.
+const BIAS: i64 = 1 << 20;
+const EMPTY: u32 = u32::MAX;
+
+/// Spreads the low 21 bits of `v` so that two zero bits separate each (for Morton codes).
+fn spread(v: u64) -> u64 {
+    let mut x = v & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x1f00000000ffff;
+    x = (x | (x << 16)) & 0x1f0000ff0000ff;
+    x = (x | (x << 8)) & 0x100f00f00f00f00f;
+    x = (x | (x << 4)) & 0x10c30c30c30c30c3;
+    x = (x | (x << 2)) & 0x1249249249249249;
+    x
+}
+
+/// Morton code of integer cell coordinates.
+fn morton(c: [i64; 3]) -> u64 {
+    let b = |v: i64| (v + BIAS).clamp(0, 2 * BIAS - 1) as u64;
+    spread(b(c[0])) | (spread(b(c[1])) << 1) | (spread(b(c[2])) << 2)
+}
+
+/// Integer coordinates of the cell holding `x`.
+#[inline]
+fn cell_of(x: &Vec3, inv_cell: Real) -> [i64; 3] {
+    [
+        (x.x * inv_cell).floor() as i64,
+        (x.y * inv_cell).floor() as i64,
+        (x.z * inv_cell).floor() as i64,
+    ]
+}
+
+/// The permutation that sorts `points` by the Morton code of their cell (cell size `cell`):
+/// entry k of the result is the old index of the point that goes to place k.
+pub fn cell_order(points: &[Vec3], cell: Real) -> Vec<u32> {
+    let inv = 1.0 / cell;
+    let mut keyed: Vec<(u64, u32)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, x)| (morton(cell_of(x, inv)), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_par_iter().map(|(_, i)| i).collect()
+}
+
+/// Reorders `data` so that `data[k]` becomes the old `data[perm[k]]`.
+pub fn permute<T: Copy + Send + Sync>(data: &mut Vec<T>, perm: &[u32]) {
+    let reordered: Vec<T> = perm.par_iter().map(|&i| data[i as usize]).collect();
+    *data = reordered;
+}
+
+/// One non-empty cell: its coordinates and the range of sorted points inside it.
+#[derive(Debug, Clone, Copy)]
+struct Cell {
+    coord: [i64; 3],
+    start: u32,
+    end: u32,
+}
+
+/// A compact hashed grid over a set of points that is already in cell order.
+#[derive(Debug, Clone)]
+pub struct CellGrid {
+    cell: Real,
+    cells: Vec<Cell>,
+    /// Open-addressing table of (Morton code, index into `cells`), a power of two long.
+    table: Vec<(u64, u32)>,
+}
+
+impl CellGrid {
+    /// Builds the grid over `points`, which must be in the order [`cell_order`] gives for the
+    /// same cell size (each cell's points must be contiguous).
+    pub fn build(points: &[Vec3], cell: Real) -> Self {
+        let inv = 1.0 / cell;
+        let mut cells: Vec<Cell> = Vec::new();
+        let mut last_key = None;
+        for (i, x) in points.iter().enumerate() {
+            let coord = cell_of(x, inv);
+            let key = morton(coord);
+            if last_key == Some(key) {
+                if let Some(c) = cells.last_mut() {
+                    c.end = i as u32 + 1;
+                }
+            } else {
+                cells.push(Cell {
+                    coord,
+                    start: i as u32,
+                    end: i as u32 + 1,
+                });
+                last_key = Some(key);
+            }
+        }
+        let size = (2 * cells.len()).next_power_of_two().max(16);
+        let mut table = vec![(0u64, EMPTY); size];
+        for (ci, c) in cells.iter().enumerate() {
+            let key = morton(c.coord);
+            let mut slot = Self::hash(key, size);
+            while table[slot].1 != EMPTY && table[slot].0 != key {
+                slot = (slot + 1) & (size - 1);
+            }
+            if table[slot].1 == EMPTY {
+                table[slot] = (key, ci as u32);
+            }
+        }
+        Self { cell, cells, table }
+    }
+
+    #[inline]
+    fn hash(key: u64, size: usize) -> usize {
+        (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 20) as usize & (size - 1)
+    }
+
+    /// The range of points in the cell with coordinates `coord`, if it holds any.
+    #[inline]
+    fn lookup(&self, coord: [i64; 3]) -> Option<(u32, u32)> {
+        let key = morton(coord);
+        let size = self.table.len();
+        let mut slot = Self::hash(key, size);
+        loop {
+            let (k, ci) = self.table[slot];
+            if ci == EMPTY {
+                return None;
+            }
+            if k == key {
+                let c = &self.cells[ci as usize];
+                return Some((c.start, c.end));
+            }
+            slot = (slot + 1) & (size - 1);
+        }
+    }
+
+    /// Ranges of points in the up to 27 cells around `coord`.
+    fn ranges_around(&self, coord: [i64; 3], out: &mut Vec<(u32, u32)>) {
+        out.clear();
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(r) = self.lookup([coord[0] + dx, coord[1] + dy, coord[2] + dz]) {
+                        out.push(r);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Number of non-empty cells.
+    pub fn cell_count(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Bytes held by the grid.
+    pub fn memory_bytes(&self) -> usize {
+        self.cells.capacity() * std::mem::size_of::<Cell>()
+            + self.table.capacity() * std::mem::size_of::<(u64, u32)>()
+    }
+}
+
+/// Neighbour lists in compressed-row form: the neighbours of point i are
+/// `indices[offsets[i]..offsets[i + 1]]`.
+#[derive(Debug, Clone, Default)]
+pub struct NeighborLists {
+    pub offsets: Vec<u32>,
+    pub indices: Vec<u32>,
+}
+
+impl NeighborLists {
+    /// The neighbours of point i.
+    #[inline]
+    pub fn of(&self, i: usize) -> &[u32] {
+        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Number of points the lists are for.
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// True when there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes held by the lists.
+    pub fn memory_bytes(&self) -> usize {
+        (self.offsets.capacity() + self.indices.capacity()) * std::mem::size_of::<u32>()
+    }
+
+    /// For every point of `queries` (in cell order, with its grid `query_grid` of the same
+    /// cell size), the points of `targets` (with grid `target_grid`) closer than `radius`.
+    /// With `exclude_self`, `queries` and `targets` are the same set and i is not its own
+    /// neighbour. `radius` must not exceed the cell size.
+    pub fn build(
+        queries: &[Vec3],
+        query_grid: &CellGrid,
+        targets: &[Vec3],
+        target_grid: &CellGrid,
+        radius: Real,
+        exclude_self: bool,
+    ) -> Self {
+        debug_assert!(radius <= query_grid.cell * (1.0 + 1e-12));
+        let r2 = radius * radius;
+        const CHUNK: usize = 64;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = query_grid
+            .cells
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut counts = Vec::new();
+                let mut idx = Vec::new();
+                let mut ranges = Vec::with_capacity(27);
+                for c in chunk {
+                    target_grid.ranges_around(c.coord, &mut ranges);
+                    for i in c.start..c.end {
+                        let xi = queries[i as usize];
+                        let before = idx.len();
+                        for &(s, e) in &ranges {
+                            for j in s..e {
+                                if exclude_self && i == j {
+                                    continue;
+                                }
+                                if (xi - targets[j as usize]).norm_squared() < r2 {
+                                    idx.push(j);
+                                }
+                            }
+                        }
+                        counts.push((idx.len() - before) as u32);
+                    }
+                }
+                (counts, idx)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(queries.len() + 1);
+        offsets.push(0u32);
+        let mut total = 0u32;
+        for (counts, _) in &parts {
+            for &c in counts {
+                total += c;
+                offsets.push(total);
+            }
+        }
+        let mut indices = Vec::with_capacity(total as usize);
+        for (_, idx) in &parts {
+            indices.extend_from_slice(idx);
+        }
+        Self { offsets, indices }
+    }
+}
+
+impl CellGrid {
+    /// Calls `f(j)` for every point j of `points` (the set this grid was built over) closer
+    /// than `radius` (at most the cell size) to the arbitrary point `p`.
+    pub fn for_each_near(&self, p: &Vec3, points: &[Vec3], radius: Real, mut f: impl FnMut(usize)) {
+        let c = cell_of(p, 1.0 / self.cell);
+        let mut ranges = Vec::with_capacity(27);
+        self.ranges_around(c, &mut ranges);
+        for (s, e) in ranges {
+            for j in s..e {
+                if (p - points[j as usize]).norm_squared() < radius * radius {
+                    f(j as usize);
+                }
+            }
+        }
+    }
+}

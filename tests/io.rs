@@ -1,0 +1,593 @@
+//! Round trips of the writers in `eddy::io`: what is written reads back identically, and a
+//! failure leaves no half-written file behind.
+
+use std::fs;
+use std::path::Path;
+
+use eddy::io::{
+    write_atomic, write_particles_vtk, AttrValue, CsvSeries, Field, Hdf5Frames, IoError,
+    ParticleFrame, PvdSeries,
+};
+use eddy::{Real, Vec3};
+use vtkio::model::{Attribute, DataSet, IOBuffer, Piece, Vtk};
+
+/// Values whose decimal forms are awkward: they catch writers that lose digits.
+const AWKWARD: [Real; 8] = [
+    0.1,
+    1.0 / 3.0,
+    -2.5e-7,
+    1e-300,
+    1e300,
+    f64::MIN_POSITIVE,
+    5e-324,
+    -0.0,
+];
+
+fn positions(n: usize, seed: Real) -> Vec<Vec3> {
+    (0..n)
+        .map(|i| {
+            let t = i as Real + seed;
+            Vec3::new(t.sin() / 3.0, (t * 0.7).cos() * 1e-3, t * 1e5 + 0.1)
+        })
+        .collect()
+}
+
+fn flat(v: &[Vec3]) -> Vec<Real> {
+    v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+fn no_temp_files(dir: &Path) {
+    let leftovers: Vec<_> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn io_error_can_cross_threads_and_anyhow() {
+    fn check<E: std::error::Error + Send + Sync + 'static>() {}
+    check::<IoError>();
+}
+
+// ---------------------------------------------------------------- write_atomic
+
+#[test]
+fn write_atomic_replaces_and_leaves_no_temp() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.txt");
+    write_atomic(&path, |w| w.write_all(b"first")).unwrap();
+    write_atomic(&path, |w| w.write_all(b"second")).unwrap();
+    assert_eq!(fs::read_to_string(&path).unwrap(), "second");
+    assert!(!dir.path().join(".out.txt.tmp").exists());
+    no_temp_files(dir.path());
+}
+
+#[test]
+fn write_atomic_failure_keeps_previous_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.txt");
+    write_atomic(&path, |w| w.write_all(b"good")).unwrap();
+    let err = write_atomic(&path, |w| {
+        w.write_all(b"half of the new cont")?;
+        Err(std::io::Error::other("writer gave up"))
+    })
+    .unwrap_err();
+    assert!(matches!(err, IoError::Io { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("out.txt") && msg.contains("writer gave up"),
+        "{msg}"
+    );
+    assert_eq!(fs::read_to_string(&path).unwrap(), "good");
+    no_temp_files(dir.path());
+}
+
+#[test]
+fn write_atomic_failure_without_previous_file_creates_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("new.txt");
+    let result = write_atomic(&path, |w| {
+        w.write_all(b"partial")?;
+        Err(std::io::Error::other("boom"))
+    });
+    assert!(result.is_err());
+    assert!(!path.exists());
+    assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn write_atomic_into_missing_directory_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("no_such_dir").join("x.txt");
+    let err = write_atomic(&path, |w| w.write_all(b"x")).unwrap_err();
+    assert!(err.to_string().contains("no_such_dir"), "{err}");
+}
+
+// ---------------------------------------------------------------- VTK
+
+/// The single inline PolyData piece of a file read back by vtkio.
+fn read_vtp(path: &Path) -> vtkio::model::PolyDataPiece {
+    let vtk = Vtk::import(path).unwrap();
+    let DataSet::PolyData { mut pieces, .. } = vtk.data else {
+        panic!("not PolyData: {:?}", vtk.data)
+    };
+    assert_eq!(pieces.len(), 1);
+    match pieces.remove(0) {
+        Piece::Inline(p) => *p,
+        other => panic!("piece not inline: {other:?}"),
+    }
+}
+
+fn f64s(buf: &IOBuffer) -> Vec<Real> {
+    match buf {
+        IOBuffer::F64(v) => v.clone(),
+        other => panic!("expected f64 data, got {:?}", other.scalar_type()),
+    }
+}
+
+#[test]
+fn vtk_roundtrip_points_fields_and_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("frame_000003.vtp");
+    let n = 50;
+    let pos = positions(n, 0.25);
+    let density: Vec<Real> = (0..n)
+        .map(|i| AWKWARD[i % AWKWARD.len()] + i as Real)
+        .collect();
+    let velocity: Vec<Vec3> = (0..n)
+        .map(|i| Vec3::new(AWKWARD[i % 8], -(i as Real) / 7.0, 1e-12 * i as Real))
+        .collect();
+    let pressure: Vec<Real> = (0..n).map(|i| -(i as Real).sqrt()).collect();
+    let frame = ParticleFrame {
+        step: 3,
+        time: 0.03,
+        positions: &pos,
+        fields: vec![
+            Field::scalar("density", &density),
+            Field::vector("velocity", &velocity),
+            Field::scalar("p \"gauge\" & <rel>", &pressure),
+        ],
+    };
+    write_particles_vtk(&path, &frame).unwrap();
+    no_temp_files(dir.path());
+
+    let piece = read_vtp(&path);
+    assert_eq!(f64s(&piece.points), flat(&pos));
+
+    let (conn, offs) = piece.verts.expect("vertex cells").into_xml();
+    assert_eq!(conn, (0..n as u64).collect::<Vec<_>>());
+    assert_eq!(offs, (1..=n as u64).collect::<Vec<_>>());
+
+    let arrays: Vec<_> = piece
+        .data
+        .point
+        .iter()
+        .map(|a| match a {
+            Attribute::DataArray(d) => (d.name.clone(), d.num_comp(), f64s(&d.data)),
+            other => panic!("unexpected attribute {other:?}"),
+        })
+        .collect();
+    assert_eq!(arrays.len(), 3);
+    assert_eq!(arrays[0], ("density".to_string(), 1, density.clone()));
+    assert_eq!(arrays[1], ("velocity".to_string(), 3, flat(&velocity)));
+    assert_eq!(
+        arrays[2],
+        ("p \"gauge\" & <rel>".to_string(), 1, pressure.clone())
+    );
+    // -0.0 == 0.0 above; check the sign bit survived too.
+    assert!(arrays[1].2[7 * 3].is_sign_negative());
+}
+
+#[test]
+fn vtk_file_is_xml_polydata_with_inline_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("f.vtp");
+    let pos = positions(4, 0.0);
+    let frame = ParticleFrame {
+        step: 0,
+        time: 0.0,
+        positions: &pos,
+        fields: vec![],
+    };
+    write_particles_vtk(&path, &frame).unwrap();
+    let text = fs::read_to_string(&path).unwrap();
+    assert!(text.starts_with("<VTKFile type=\"PolyData\""), "{text}");
+    assert!(text.contains("header_type=\"UInt64\""), "{text}");
+    assert!(text.contains("NumberOfVerts=\"4\""), "{text}");
+    assert!(text.contains("format=\"binary\""), "{text}");
+}
+
+#[test]
+fn vtk_empty_frame_roundtrips() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("empty.vtp");
+    let frame = ParticleFrame {
+        step: 0,
+        time: 0.0,
+        positions: &[],
+        fields: vec![Field::scalar("density", &[])],
+    };
+    write_particles_vtk(&path, &frame).unwrap();
+    // VTK's reader needs the zero counts spelled out.
+    let text = fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("<Piece NumberOfPoints=\"0\" NumberOfVerts=\"0\">"),
+        "{text}"
+    );
+    let piece = read_vtp(&path);
+    assert_eq!(piece.num_points(), 0);
+    assert_eq!(piece.data.point.len(), 1);
+}
+
+#[test]
+fn vtk_rejects_bad_frames_without_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let pos = positions(3, 0.0);
+    let short = [1.0, 2.0];
+    let ok = [1.0, 2.0, 3.0];
+    let cases: Vec<(&str, ParticleFrame)> = vec![
+        (
+            "a.vtp",
+            ParticleFrame {
+                step: 0,
+                time: 0.0,
+                positions: &pos,
+                fields: vec![Field::scalar("density", &short)],
+            },
+        ),
+        (
+            "b.vtp",
+            ParticleFrame {
+                step: 0,
+                time: 0.0,
+                positions: &pos,
+                fields: vec![Field::scalar("d", &ok), Field::scalar("d", &ok)],
+            },
+        ),
+        (
+            "c.vtk",
+            ParticleFrame {
+                step: 0,
+                time: 0.0,
+                positions: &pos,
+                fields: vec![],
+            },
+        ),
+    ];
+    for (name, frame) in cases {
+        let path = dir.path().join(name);
+        let err = write_particles_vtk(&path, &frame).unwrap_err();
+        assert!(matches!(err, IoError::Invalid { .. }), "{name}: {err:?}");
+        assert!(err.to_string().contains(name), "{err}");
+        assert!(!path.exists());
+    }
+    assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+// ---------------------------------------------------------------- PVD
+
+/// Parses `<DataSet timestep=".." ... file=".."/>` lines; the writer puts one per line.
+fn pvd_entries(text: &str) -> Vec<(Real, String)> {
+    text.lines()
+        .filter(|l| l.trim_start().starts_with("<DataSet "))
+        .map(|l| {
+            let attr = |key: &str| {
+                let start = l.find(&format!(" {key}=\"")).unwrap() + key.len() + 3;
+                let len = l[start..].find('"').unwrap();
+                l[start..start + len].to_string()
+            };
+            (attr("timestep").parse().unwrap(), attr("file"))
+        })
+        .collect()
+}
+
+#[test]
+fn pvd_lists_frames_in_order_after_every_push() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("particles.pvd");
+    let mut series = PvdSeries::new(&path);
+    assert!(!path.exists(), "nothing is written before the first frame");
+    let times = [0.0, 0.1, 1.0 / 3.0];
+    for (i, &t) in times.iter().enumerate() {
+        let name = format!("frames/particles_{i:06}.vtp");
+        series.push(t, &name).unwrap();
+        // After each push the file is complete and lists every frame so far.
+        let text = fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("<?xml"));
+        assert!(text.contains("<VTKFile type=\"Collection\""));
+        assert!(text.trim_end().ends_with("</VTKFile>"));
+        let entries = pvd_entries(&text);
+        assert_eq!(entries.len(), i + 1);
+        for (j, (time, file)) in entries.iter().enumerate() {
+            assert_eq!(*time, times[j]);
+            assert_eq!(*file, format!("frames/particles_{j:06}.vtp"));
+        }
+    }
+    assert_eq!(series.len(), 3);
+    no_temp_files(dir.path());
+}
+
+#[test]
+fn pvd_escapes_names_and_parses_as_xml() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.pvd");
+    let mut series = PvdSeries::new(&path);
+    series.push(0.5, "a&b <\"q\">.vtp").unwrap();
+    series.push(1.5, "plain.vtp").unwrap();
+    let text = fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("file=\"a&amp;b &lt;&quot;q&quot;&gt;.vtp\""),
+        "{text}"
+    );
+    assert!(series.push(Real::NAN, "x.vtp").is_err());
+    assert_eq!(fs::read_to_string(&path).unwrap(), text);
+
+    // A real XML parser, when one is installed, must agree with what was written.
+    let script = "import sys, xml.etree.ElementTree as E\n\
+                  r = E.parse(sys.argv[1]).getroot()\n\
+                  assert r.tag == 'VTKFile' and r.get('type') == 'Collection'\n\
+                  for d in r.find('Collection'): print(d.get('timestep'), d.get('file'))\n";
+    if let Ok(out) = std::process::Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(&path)
+        .output()
+    {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            String::from_utf8_lossy(&out.stdout),
+            "0.5 a&b <\"q\">.vtp\n1.5 plain.vtp\n"
+        );
+    }
+}
+
+// ---------------------------------------------------------------- HDF5
+
+fn read_attr<T: hdf5::H5Type>(loc: &hdf5::Group, name: &str) -> T {
+    loc.attr(name).unwrap().read_scalar::<T>().unwrap()
+}
+
+#[test]
+fn hdf5_frames_roundtrip() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("frames.h5");
+    let mut out = Hdf5Frames::create(
+        &path,
+        &[
+            ("scene", AttrValue::Str("dam break ü".into())),
+            ("particle_spacing", AttrValue::Real(0.0125)),
+            ("seed", AttrValue::Int(-7)),
+        ],
+    )
+    .unwrap();
+    no_temp_files(dir.path());
+
+    let counts = [5usize, 0, 17];
+    let mut written = Vec::new();
+    for (k, &n) in counts.iter().enumerate() {
+        let pos = positions(n, k as Real);
+        let density: Vec<Real> = (0..n).map(|i| 1000.0 + AWKWARD[i % 8]).collect();
+        let velocity: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new(i as Real, -(k as Real), 1.0 / (i as Real + 1.0)))
+            .collect();
+        let frame = ParticleFrame {
+            step: 100 * k as u64 + 1,
+            time: 0.1 * k as Real,
+            positions: &pos,
+            fields: vec![
+                Field::scalar("density", &density),
+                Field::vector("velocity", &velocity),
+            ],
+        };
+        out.append(&frame).unwrap();
+        written.push((frame.step, frame.time, pos, density, velocity));
+    }
+    assert_eq!(out.len(), 3);
+
+    let file = hdf5::File::open(&path).unwrap();
+    let scene: hdf5::types::VarLenUnicode = read_attr(&file, "scene");
+    assert_eq!(scene.as_str(), "dam break ü");
+    assert_eq!(read_attr::<f64>(&file, "particle_spacing"), 0.0125);
+    assert_eq!(read_attr::<i64>(&file, "seed"), -7);
+    assert_eq!(file.member_names().unwrap(), vec!["frames".to_string()]);
+
+    let frames = file.group("frames").unwrap();
+    assert_eq!(
+        frames.member_names().unwrap(),
+        vec!["000000", "000001", "000002"]
+    );
+    for (k, (step, time, pos, density, velocity)) in written.iter().enumerate() {
+        let g = frames.group(&format!("{k:06}")).unwrap();
+        assert_eq!(read_attr::<u64>(&g, "step"), *step);
+        assert_eq!(read_attr::<f64>(&g, "time"), *time);
+        let n = pos.len();
+        let p = g.dataset("position").unwrap();
+        assert_eq!(p.shape(), vec![n, 3]);
+        assert_eq!(p.dtype().unwrap().size(), 8);
+        assert_eq!(p.read_raw::<f64>().unwrap(), flat(pos));
+        let d = g.dataset("density").unwrap();
+        assert_eq!(d.shape(), vec![n]);
+        assert_eq!(d.read_raw::<f64>().unwrap(), *density);
+        let v = g.dataset("velocity").unwrap();
+        assert_eq!(v.shape(), vec![n, 3]);
+        assert_eq!(v.read_raw::<f64>().unwrap(), flat(velocity));
+    }
+}
+
+#[test]
+fn hdf5_append_to_truncated_file_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.h5");
+    let mut out = Hdf5Frames::create(&path, &[("scene", AttrValue::from("cut"))]).unwrap();
+    let pos = positions(200, 0.0);
+    let frame = ParticleFrame {
+        step: 1,
+        time: 0.5,
+        positions: &pos,
+        fields: vec![],
+    };
+    out.append(&frame).unwrap();
+    out.append(&frame).unwrap();
+
+    let len = fs::metadata(&path).unwrap().len();
+    fs::OpenOptions::new()
+        .write(true)
+        .open(&path)
+        .unwrap()
+        .set_len(len / 2)
+        .unwrap();
+    let err = out.append(&frame).unwrap_err();
+    assert!(matches!(err, IoError::Hdf5 { .. }), "{err:?}");
+    assert!(err.to_string().contains("cut.h5"), "{err}");
+    assert_eq!(out.len(), 2, "a failed append must not advance the index");
+
+    // A file cut to nothing, and one that is gone, fail the same way.
+    fs::write(&path, b"").unwrap();
+    assert!(out.append(&frame).is_err());
+    fs::remove_file(&path).unwrap();
+    assert!(out.append(&frame).is_err());
+}
+
+#[test]
+fn hdf5_rejects_bad_frames_and_attributes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.h5");
+    let dup = Hdf5Frames::create(&path, &[("a", AttrValue::Int(1)), ("a", AttrValue::Int(2))]);
+    assert!(matches!(dup, Err(IoError::Invalid { .. })));
+    assert!(!path.exists());
+
+    let mut out = Hdf5Frames::create(&path, &[]).unwrap();
+    let pos = positions(3, 0.0);
+    let vals = [1.0, 2.0, 3.0];
+    for name in ["position", "a/b", ""] {
+        let frame = ParticleFrame {
+            step: 0,
+            time: 0.0,
+            positions: &pos,
+            fields: vec![Field::scalar(name, &vals)],
+        };
+        let err = out.append(&frame).unwrap_err();
+        assert!(matches!(err, IoError::Invalid { .. }), "{name:?}: {err:?}");
+    }
+    let frame = ParticleFrame {
+        step: 0,
+        time: 0.0,
+        positions: &pos,
+        fields: vec![Field::scalar("short", &vals[..2])],
+    };
+    assert!(matches!(out.append(&frame), Err(IoError::Invalid { .. })));
+    assert_eq!(out.len(), 0);
+    let file = hdf5::File::open(&path).unwrap();
+    assert_eq!(file.group("frames").unwrap().len(), 0);
+}
+
+#[test]
+fn hdf5_leftover_of_a_crashed_append_is_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crash.h5");
+    let mut out = Hdf5Frames::create(&path, &[]).unwrap();
+    let pos = positions(3, 0.0);
+    let frame = ParticleFrame {
+        step: 1,
+        time: 0.5,
+        positions: &pos,
+        fields: vec![],
+    };
+    out.append(&frame).unwrap();
+    // What a crash mid-append leaves: a started frame outside /frames.
+    {
+        let file = hdf5::File::open_rw(&path).unwrap();
+        let roots = file.member_names().unwrap();
+        assert_eq!(
+            roots,
+            vec!["frames"],
+            "no partial group after a clean append"
+        );
+        let partial = file.create_group("partial_frame").unwrap();
+        partial
+            .new_dataset::<f64>()
+            .shape((7, 3))
+            .create("position")
+            .unwrap();
+    }
+    out.append(&frame).unwrap();
+    let file = hdf5::File::open(&path).unwrap();
+    assert_eq!(file.member_names().unwrap(), vec!["frames"]);
+    let frames = file.group("frames").unwrap();
+    assert_eq!(frames.member_names().unwrap(), vec!["000000", "000001"]);
+    let p = frames.group("000001").unwrap().dataset("position").unwrap();
+    assert_eq!(p.read_raw::<f64>().unwrap(), flat(&pos));
+}
+
+// ---------------------------------------------------------------- CSV
+
+#[test]
+fn csv_header_rows_and_exact_numbers() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("metrics.csv");
+    let columns: Vec<String> = ["time", "energy", "odd, \"name\""]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut csv = CsvSeries::create(&path, &columns).unwrap();
+    assert_eq!(
+        fs::read_to_string(&path).unwrap(),
+        "time,energy,\"odd, \"\"name\"\"\"\n",
+        "the header is on disk before any row"
+    );
+    let mut rows: Vec<[Real; 3]> = AWKWARD
+        .chunks(2)
+        .enumerate()
+        .map(|(i, c)| [i as Real * 0.1, c[0], c[1]])
+        .collect();
+    rows.push([f64::MAX, -f64::MAX, 123456789.0]);
+    rows.push([Real::INFINITY, Real::NEG_INFINITY, 1e15]);
+    for r in &rows {
+        csv.row(r).unwrap();
+        // Flushed every row: the file already holds it, without dropping the writer.
+        let lines = fs::read_to_string(&path).unwrap().lines().count();
+        assert!(lines >= 2);
+    }
+
+    let wrong = csv.row(&[1.0, 2.0]).unwrap_err();
+    assert!(matches!(wrong, IoError::Invalid { .. }), "{wrong:?}");
+    assert!(wrong.to_string().contains("metrics.csv"), "{wrong}");
+    assert!(csv.row(&[1.0, 2.0, 3.0, 4.0]).is_err());
+
+    let text = fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    lines.next();
+    let read: Vec<Vec<Real>> = lines
+        .map(|l| l.split(',').map(|s| s.parse::<Real>().unwrap()).collect())
+        .collect();
+    assert_eq!(read.len(), rows.len(), "bad rows wrote nothing");
+    for (r, w) in read.iter().zip(&rows) {
+        assert_eq!(r.len(), 3);
+        for (a, b) in r.iter().zip(w) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} vs {b}");
+        }
+    }
+    // Exponent form keeps 1e300 and 1e-300 short instead of 300 digits.
+    assert!(
+        text.split([',', '\n']).all(|v| v.len() <= 24),
+        "overlong numbers: {text}"
+    );
+}
+
+#[test]
+fn csv_nan_and_empty_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("probes.csv");
+    assert!(CsvSeries::create(&path, &[]).is_err());
+    let mut csv = CsvSeries::create(&path, &["x".to_string()]).unwrap();
+    csv.row(&[Real::NAN]).unwrap();
+    let text = fs::read_to_string(&path).unwrap();
+    let v: Real = text.lines().nth(1).unwrap().parse().unwrap();
+    assert!(v.is_nan());
+}

@@ -36,14 +36,15 @@ impl CubicSpline {
     /// W(r) for a distance r >= 0.
     #[inline]
     pub fn w(&self, r: Real) -> Real {
+        if r >= self.h {
+            return 0.0;
+        }
         let q = r * self.inv_h;
         if q <= 0.5 {
             self.k * (6.0 * q * q * (q - 1.0) + 1.0)
-        } else if q <= 1.0 {
-            let t = 1.0 - q;
-            self.k * 2.0 * t * t * t
         } else {
-            0.0
+            let t = (1.0 - q).max(0.0);
+            self.k * 2.0 * t * t * t
         }
     }
 

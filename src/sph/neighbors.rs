@@ -40,10 +40,14 @@ fn cell_of(x: &Vec3, inv_cell: Real) -> [i64; 3] {
     ]
 }
 
+/// Cells are this much wider than asked, so that rounding in `x / cell` can never put two points
+/// closer than the cell size two cells apart (which would hide them from each other).
+const CELL_MARGIN: Real = 1.0 + 1e-9;
+
 /// The permutation that sorts `points` by the Morton code of their cell (cell size `cell`):
 /// entry k of the result is the old index of the point that goes to place k.
 pub fn cell_order(points: &[Vec3], cell: Real) -> Vec<u32> {
-    let inv = 1.0 / cell;
+    let inv = 1.0 / (cell * CELL_MARGIN);
     let mut keyed: Vec<(u64, u32)> = points
         .par_iter()
         .enumerate()
@@ -80,6 +84,7 @@ impl CellGrid {
     /// Builds the grid over `points`, which must be in the order [`cell_order`] gives for the
     /// same cell size (each cell's points must be contiguous).
     pub fn build(points: &[Vec3], cell: Real) -> Self {
+        let cell = cell * CELL_MARGIN;
         let inv = 1.0 / cell;
         let mut cells: Vec<Cell> = Vec::new();
         let mut last_key = None;

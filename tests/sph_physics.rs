@@ -1,0 +1,224 @@
+//! Physics checks of the SPH solvers on the shipped scenes: hydrostatic equilibrium, the DFSPH
+//! solvers' tolerances, and the dam break's front and energy.
+
+use eddy::metrics::{self, probes};
+use eddy::run::{bodies, RunOptions};
+use eddy::scene::{self, Scene};
+use eddy::sph::SphSolver;
+use eddy::{Real, Vec3};
+use std::path::Path;
+
+fn scene(file: &str, overrides: &[&str]) -> Scene {
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join(file),
+        &overrides,
+    )
+    .expect("shipped scene loads")
+}
+
+fn solver(scene: &Scene) -> SphSolver {
+    SphSolver::new(scene, bodies(scene).expect("bodies build"))
+}
+
+const G: Real = 9.81;
+
+/// Water at rest: after settling, the time-averaged pressure on the tank's axis falls linearly
+/// with height at rho g (least-squares slope within 2 %), the fluid is compressed by less than
+/// 0.1 % on average, every particle stays in the tank, and the kinetic energy decays.
+#[test]
+fn hydrostatic_tank_settles_to_rho_g_gradient() {
+    let scene = scene("scenes/hydrostatic_tank.toml", &["time.end=1.6"]);
+    let mut s = solver(&scene);
+    let heights = [0.08, 0.13, 0.18, 0.23, 0.28];
+    let mut sums = [0.0; 5];
+    let mut samples = 0;
+    let mut early_ke = 0.0;
+    let mut late_ke = 0.0;
+    while s.time() < 1.6 {
+        s.advance().expect("stable");
+        s.update_neighborhoods();
+        let ke = metrics::kinetic_energy(s.fluid.mass, &s.fluid.v);
+        if (0.3..0.5).contains(&s.time()) {
+            early_ke = Real::max(early_ke, ke);
+        }
+        if s.time() > 1.1 {
+            late_ke = Real::max(late_ke, ke);
+            for (sum, y) in sums.iter_mut().zip(heights) {
+                let (p, _) = probes::sample_point(&s, &Vec3::new(0.2, y, 0.2)).expect("fluid");
+                *sum += p;
+            }
+            samples += 1;
+        }
+    }
+    let p: Vec<Real> = sums.iter().map(|s| s / samples as Real).collect();
+    let n = heights.len() as Real;
+    let my = heights.iter().sum::<Real>() / n;
+    let mp = p.iter().sum::<Real>() / n;
+    let slope = heights
+        .iter()
+        .zip(&p)
+        .map(|(y, p)| (y - my) * (p - mp))
+        .sum::<Real>()
+        / heights.iter().map(|y| (y - my).powi(2)).sum::<Real>();
+    let rho_g = s.fluid.rest_density * G;
+    assert!(
+        (-slope / rho_g - 1.0).abs() < 0.02,
+        "dp/dy = {slope:.1} Pa/m, expected -{rho_g:.1} (pressures {p:?})"
+    );
+    // The zero-pressure level lies within one kernel support of the top particle layer.
+    let top = s.fluid.x.iter().map(|x| x.y).fold(Real::MIN, Real::max);
+    let zero_level = my - mp / slope;
+    assert!(
+        (zero_level - top).abs() < s.kernel.support(),
+        "p = 0 at y = {zero_level:.4}, top layer at {top:.4}"
+    );
+    let (avg, _) = metrics::density_errors(&s.fluid.density, s.fluid.rest_density);
+    assert!(avg < 1e-3, "average compression {avg}");
+    assert!(s.fluid.x.iter().all(|x| (0.0..=0.4).contains(&x.x)
+        && (0.0..=0.6).contains(&x.y)
+        && (0.0..=0.4).contains(&x.z)));
+    assert!(
+        late_ke < 0.75 * early_ke,
+        "kinetic energy {late_ke} after settling vs {early_ke}"
+    );
+}
+
+/// DFSPH: each solve ends under its tolerance (unless it ran out of iterations), and the
+/// divergence solve leaves the velocity divergence of the interior under its tolerance.
+#[test]
+fn dfsph_solvers_meet_their_tolerances_in_the_dam_break() {
+    let scene = scene(
+        "scenes/dam_break.toml",
+        &[
+            "time.end=0.5",
+            "container.shape.half_extents=[2.0, 0.5, 0.05]",
+            "container.position=[2.0, 0.5, 0.05]",
+            "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
+        ],
+    );
+    let p = &scene.pressure;
+    let mut s = solver(&scene);
+    let mut steps = 0;
+    while s.time() < 0.5 {
+        let stats = s.advance().expect("stable");
+        s.update_neighborhoods();
+        if stats.pressure.iterations < p.max_iterations {
+            assert!(stats.pressure.error <= p.density_tolerance, "{stats:?}");
+        }
+        if stats.divergence.iterations < p.max_iterations {
+            assert!(
+                stats.divergence.error <= p.divergence_tolerance,
+                "{stats:?}"
+            );
+        }
+        // The density measured at the new positions stays close to the solver's prediction.
+        let (avg, _) = metrics::density_errors(&s.fluid.density, s.fluid.rest_density);
+        assert!(
+            avg < 2.0 * p.density_tolerance + 1e-4,
+            "measured average compression {avg}"
+        );
+        steps += 1;
+    }
+    assert!(steps > 100);
+}
+
+/// Dam break (Martin & Moyce): the front advances (never receding by more than a tenth of a
+/// spacing) until it reaches the far wall, its speed stays below the shallow-water bound
+/// 2 sqrt(2 g a), and kinetic plus potential energy never grows (no moving bodies here).
+#[test]
+fn dam_break_front_and_energy() {
+    let scene = scene(
+        "scenes/dam_break.toml",
+        &[
+            "time.end=0.8",
+            "container.shape.half_extents=[2.0, 0.5, 0.05]",
+            "container.position=[2.0, 0.5, 0.05]",
+            "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
+        ],
+    );
+    let a = 0.5;
+    let gravity = Vec3::from(scene.gravity);
+    let mut s = solver(&scene);
+    let energy = |s: &SphSolver| {
+        metrics::kinetic_energy(s.fluid.mass, &s.fluid.v)
+            + metrics::potential_energy(s.fluid.mass, &s.fluid.x, &gravity)
+    };
+    let e0 = energy(&s);
+    let mut last_e = e0;
+    let mut front = probes::front(&s.fluid.x, 0, 0.0);
+    let mut history = vec![(0.0, front)];
+    while s.time() < 0.8 {
+        s.advance().expect("stable");
+        s.update_neighborhoods();
+        let e = energy(&s);
+        assert!(
+            e <= last_e + 1e-6 * e0,
+            "energy grew from {last_e} to {e} at t = {}",
+            s.time()
+        );
+        last_e = e;
+        let f = probes::front(&s.fluid.x, 0, 0.0);
+        if f < 3.9 {
+            assert!(
+                f > front - 0.1 * s.spacing,
+                "front receded from {front} to {f}"
+            );
+        }
+        front = front.max(f);
+        history.push((s.time(), f));
+    }
+    assert!(front > 2.0, "the front only reached {front} m");
+    let bound = 2.0 * (2.0 * G * a).sqrt();
+    for w in history.windows(10) {
+        let speed = (w[9].1 - w[0].1) / (w[9].0 - w[0].0);
+        assert!(speed < bound, "front speed {speed} above {bound}");
+    }
+    assert!(last_e < e0, "a dam break dissipates energy");
+}
+
+/// IISPH holds the same water at rest: every solve ends under its tolerance and no particle
+/// leaves the tank. (Measured after the step, IISPH's average compression is about 0.17 %, above
+/// the 0.05 % it predicts; DFSPH's stays under 0.1 %. Tracked in the issue notes.)
+#[test]
+fn iisph_keeps_the_tank_incompressible() {
+    let scene = scene("scenes/hydrostatic_tank.toml", &["pressure.solver=iisph"]);
+    let mut s = solver(&scene);
+    while s.time() < 0.6 {
+        let stats = s.advance().expect("stable");
+        s.update_neighborhoods();
+        if s.time() > 0.3 {
+            assert!(stats.pressure.error <= scene.pressure.density_tolerance);
+            assert!(s.fluid.x.iter().all(|x| x.y > 0.0 && x.y < 0.6));
+        }
+    }
+}
+
+/// A run from the command-line entry point writes the resolved scene, metrics, probes and a
+/// ParaView series, and cut short with --steps stops there.
+#[test]
+fn run_writes_outputs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let options = RunOptions {
+        out: Some(dir.path().to_path_buf()),
+        overrides: vec!["output.hdf5=true".into()],
+        steps: Some(5),
+        ..RunOptions::default()
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let summary = eddy::run::run(&path, &options).expect("runs");
+    assert_eq!(summary.steps, 5);
+    for f in [
+        "scene.toml",
+        "metrics.csv",
+        "probes.csv",
+        "particles.pvd",
+        "frames.h5",
+    ] {
+        assert!(dir.path().join(f).exists(), "{f} missing");
+    }
+    let metrics = std::fs::read_to_string(dir.path().join("metrics.csv")).expect("metrics");
+    assert_eq!(metrics.lines().count(), 1 + 5);
+    let resolved = scene::load(&dir.path().join("scene.toml"), &[]).expect("resolved scene loads");
+    assert!(resolved.output.hdf5);
+}

@@ -7,6 +7,7 @@
 //! arrays inline as base64 binary (`header_type` UInt64, no compression) in the machine's byte
 //! order, at full f64 precision.
 
+use std::ops::Range;
 use std::path::Path;
 
 use vtkio::model::{
@@ -72,21 +73,31 @@ pub fn write_grid_vtk(path: &Path, frame: &GridFrame) -> Result<(), IoError> {
         source,
     })?;
     let origin = frame.origin;
-    let text = with_exact_geometry(&buf, [origin.x, origin.y, origin.z], [frame.spacing; 3])
-        .ok_or_else(|| {
-            IoError::invalid(
-                path,
-                "vtkio wrote no ImageData Origin and Spacing attributes to replace",
-            )
-        })?;
-    write_atomic(path, |out| out.write_all(&text))
+    let (tag_range, tag) =
+        exact_geometry_tag(&buf, [origin.x, origin.y, origin.z], [frame.spacing; 3]).ok_or_else(
+            || {
+                IoError::invalid(
+                    path,
+                    "vtkio wrote no ImageData Origin and Spacing attributes to replace",
+                )
+            },
+        )?;
+    write_atomic(path, |out| {
+        out.write_all(&buf[..tag_range.start])?;
+        out.write_all(tag.as_bytes())?;
+        out.write_all(&buf[tag_range.end..])
+    })
 }
 
-/// The file with the `Origin` and `Spacing` attributes of its `<ImageData` element rewritten at
-/// full f64 precision: vtkio rounds them to f32, which would shift cells by up to 1e-7 of the
-/// domain size. `None` if either attribute is missing.
-fn with_exact_geometry(xml: &[u8], origin: [Real; 3], spacing: [Real; 3]) -> Option<Vec<u8>> {
-    // Only the element's opening tag is text we touch; the (binary-safe) rest is copied as is.
+/// The byte range of the `<ImageData ...` opening tag in `xml` and that tag with its `Origin`
+/// and `Spacing` rewritten at full f64 precision: vtkio keeps them in f32, whose relative error
+/// of 6e-8 would grow with the cell index into visible misplacement on large or offset grids.
+/// `None` if either attribute is missing.
+fn exact_geometry_tag(
+    xml: &[u8],
+    origin: [Real; 3],
+    spacing: [Real; 3],
+) -> Option<(Range<usize>, String)> {
     let start = find(xml, b"<ImageData ")?;
     let end = start + find(&xml[start..], b">")?;
     let mut tag = std::str::from_utf8(&xml[start..end]).ok()?.to_string();
@@ -100,11 +111,7 @@ fn with_exact_geometry(xml: &[u8], origin: [Real; 3], spacing: [Real; 3]) -> Opt
             &format!("{} {} {}", v[0], v[1], v[2]),
         );
     }
-    let mut out = Vec::with_capacity(xml.len() + 64);
-    out.extend_from_slice(&xml[..start]);
-    out.extend_from_slice(tag.as_bytes());
-    out.extend_from_slice(&xml[end..]);
-    Some(out)
+    Some((start..end, tag))
 }
 
 fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {

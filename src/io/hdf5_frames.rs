@@ -137,10 +137,10 @@ impl Hdf5Frames {
 }
 
 /// An HDF5 failure as (what was being done, the library's message).
-type Failure = (String, String);
+pub(super) type Failure = (String, String);
 
 /// Attaches what was being done to an HDF5 error.
-fn ctx<T>(r: hdf5::Result<T>, action: impl FnOnce() -> String) -> Result<T, Failure> {
+pub(super) fn ctx<T>(r: hdf5::Result<T>, action: impl FnOnce() -> String) -> Result<T, Failure> {
     r.map_err(|e| (action(), e.to_string()))
 }
 
@@ -168,7 +168,11 @@ fn create_file(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<(), Fail
     ctx(file.close(), || "closing file".into())
 }
 
-fn write_scalar_attr<T: hdf5::H5Type>(loc: &Group, name: &str, v: &T) -> Result<(), Failure> {
+pub(super) fn write_scalar_attr<T: hdf5::H5Type>(
+    loc: &Group,
+    name: &str,
+    v: &T,
+) -> Result<(), Failure> {
     let what = || format!("writing attribute {name:?}");
     let attr = ctx(loc.new_attr::<T>().shape(()).create(name), what)?;
     ctx(attr.as_writer().write_scalar(v), what)
@@ -195,6 +199,29 @@ fn write_dataset(
 }
 
 fn append_frame(path: &Path, name: &str, frame: &ParticleFrame) -> Result<(), Failure> {
+    append_group(path, name, frame.step, frame.time, |_, group| {
+        let n = frame.positions.len();
+        write_dataset(group, "position", &flatten(frame.positions), n, 3)?;
+        for field in &frame.fields {
+            match field.data {
+                FieldData::Scalar(v) => write_dataset(group, field.name, v, n, 1)?,
+                FieldData::Vector(v) => write_dataset(group, field.name, &flatten(v), n, 3)?,
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Appends the frame group `/frames/<name>` with attributes `time` and `step`, its content
+/// written by `write` (which also gets the file, for root attributes), built under
+/// [`PARTIAL`] and moved into place only when complete.
+pub(super) fn append_group(
+    path: &Path,
+    name: &str,
+    step: u64,
+    time: Real,
+    write: impl FnOnce(&File, &Group) -> Result<(), Failure>,
+) -> Result<(), Failure> {
     let file = ctx(File::open_rw(path), || "opening for append".into())?;
     {
         let frames = ctx(file.group(FRAMES), || "opening /frames".into())?;
@@ -213,16 +240,9 @@ fn append_frame(path: &Path, name: &str, frame: &ParticleFrame) -> Result<(), Fa
         let what = || format!("writing frame {name}");
         {
             let group = ctx(file.create_group(PARTIAL), what)?;
-            write_scalar_attr(&group, "time", &frame.time)?;
-            write_scalar_attr(&group, "step", &frame.step)?;
-            let n = frame.positions.len();
-            write_dataset(&group, "position", &flatten(frame.positions), n, 3)?;
-            for field in &frame.fields {
-                match field.data {
-                    FieldData::Scalar(v) => write_dataset(&group, field.name, v, n, 1)?,
-                    FieldData::Vector(v) => write_dataset(&group, field.name, &flatten(v), n, 3)?,
-                }
-            }
+            write_scalar_attr(&group, "time", &time)?;
+            write_scalar_attr(&group, "step", &step)?;
+            write(&file, &group)?;
         }
         ctx(file.relink(PARTIAL, &format!("{FRAMES}/{name}")), || {
             format!("moving frame {name} into /{FRAMES}")

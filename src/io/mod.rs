@@ -1,22 +1,29 @@
-//! Writers: VTK particle frames for ParaView, HDF5 frames for h5py, CSV series.
+//! Writers: VTK particle and grid frames for ParaView, HDF5 particle and grid frames for h5py,
+//! CSV series.
 //!
 //! Every writer is built so that a run killed at any moment leaves readable output: single files
 //! are replaced atomically ([`write_atomic`]), the ParaView series is rewritten after each frame
 //! ([`PvdSeries`]), HDF5 frames appear under their final name only when complete
-//! ([`Hdf5Frames`]), and CSV rows reach the OS one whole row at a time ([`CsvSeries`]).
+//! ([`Hdf5Frames`], [`Hdf5GridFrames`]), and CSV rows reach the OS one whole row at a time ([`CsvSeries`]).
 
 mod atomic;
 mod csv;
 mod error;
 mod frame;
+mod grid_frame;
 mod hdf5_frames;
+mod hdf5_grid;
 mod pvd;
+mod vti;
 mod vtk;
 
 pub use atomic::write_atomic;
 pub use csv::CsvSeries;
 pub use error::IoError;
 pub use frame::{Field, FieldData, ParticleFrame};
+pub use grid_frame::{GridField, GridFieldData, GridFrame};
 pub use hdf5_frames::{AttrValue, Hdf5Frames};
+pub use hdf5_grid::{Hdf5GridFrames, GRID_FORMAT, GRID_FORMAT_VERSION};
 pub use pvd::PvdSeries;
+pub use vti::write_grid_vtk;
 pub use vtk::write_particles_vtk;

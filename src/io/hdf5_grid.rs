@@ -1,0 +1,182 @@
+//! All grid frames of a run in one HDF5 file, laid out like the particle frames for h5py.
+//!
+//! ```text
+//! /                         root attributes: `format` ("eddy-grid-frames"), `format_version` (1),
+//!                           those given at creation, and from the first frame on the grid's
+//!                           `origin` (3 f64), `spacing` (f64) and `dims` (3 u64)
+//! /frames/000000            group, attributes `time` (f64) and `step` (u64)
+//! /frames/000000/<field>    nx x ny x nz f64 (scalar) or nx x ny x nz x 3 f64 (vector),
+//!                           C order, indexed [i, j, k] = [x, y, z] as in the solver
+//! ```
+//!
+//! Cell `(i, j, k)` spans `origin + spacing * [i, i + 1] x [j, j + 1] x [k, k + 1]`, so in h5py
+//! `f["frames/000000/pressure"][i, j, k]` is the value at the cell centre
+//! `origin + spacing * (i + 0.5, j + 0.5, k + 0.5)`.
+
+use std::path::{Path, PathBuf};
+
+use hdf5::Group;
+
+use super::hdf5_frames::{append_group, ctx, write_scalar_attr, Failure};
+use super::{AttrValue, GridFieldData, GridFrame, Hdf5Frames, IoError};
+use crate::{Real, Vec3};
+
+/// Value of the root attribute `format`, so readers can tell grid files from particle files.
+pub const GRID_FORMAT: &str = "eddy-grid-frames";
+/// Value of the root attribute `format_version`; raised when the layout changes.
+pub const GRID_FORMAT_VERSION: i64 = 1;
+
+/// Root attributes the writer sets itself; callers may not pass them.
+const RESERVED: [&str; 5] = ["format", "format_version", "origin", "spacing", "dims"];
+
+/// The grid every frame of a file shares.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Geometry {
+    origin: Vec3,
+    spacing: Real,
+    dims: [usize; 3],
+}
+
+impl Geometry {
+    fn of(frame: &GridFrame) -> Self {
+        Geometry {
+            origin: frame.origin,
+            spacing: frame.spacing,
+            dims: frame.dims,
+        }
+    }
+}
+
+/// All grid frames in one HDF5 file readable by h5py, one group `/frames/NNNNNN` (6-digit
+/// zero-padded frame index, counting from 0) per frame, with the same crash behaviour as
+/// [`Hdf5Frames`]: the file is opened and closed per frame, and a frame appears under `/frames`
+/// only when complete.
+///
+/// The grid (origin, spacing, dims) is fixed by the first frame and stored as root attributes;
+/// a later frame on another grid is refused. HDF5 serializes all calls behind one global lock:
+/// append from one thread.
+#[derive(Debug)]
+pub struct Hdf5GridFrames {
+    path: PathBuf,
+    next_index: u64,
+    /// Set once the first frame is in the file.
+    geometry: Option<Geometry>,
+}
+
+impl Hdf5GridFrames {
+    /// Creates (or replaces) the file with the format attributes, the given root attributes and
+    /// an empty `/frames`, atomically as [`Hdf5Frames::create`] does.
+    pub fn create(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<Self, IoError> {
+        if let Some((name, _)) = attributes.iter().find(|(n, _)| RESERVED.contains(n)) {
+            return Err(IoError::invalid(
+                path,
+                format!("root attribute name {name:?} is reserved for the grid writer"),
+            ));
+        }
+        let mut all = vec![
+            ("format", AttrValue::from(GRID_FORMAT)),
+            ("format_version", AttrValue::Int(GRID_FORMAT_VERSION)),
+        ];
+        all.extend_from_slice(attributes);
+        Hdf5Frames::create(path, &all)?;
+        Ok(Hdf5GridFrames {
+            path: path.to_path_buf(),
+            next_index: 0,
+            geometry: None,
+        })
+    }
+
+    /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
+    /// complete, so a failed append can be retried.
+    pub fn append(&mut self, frame: &GridFrame) -> Result<(), IoError> {
+        frame.validate(&self.path)?;
+        let geometry = Geometry::of(frame);
+        if let Some(fixed) = self.geometry {
+            if fixed != geometry {
+                return Err(IoError::invalid(
+                    &self.path,
+                    format!(
+                        "grid frame has origin {:?}, spacing {}, dims {:?}, but the file's grid \
+                         has origin {:?}, spacing {}, dims {:?}",
+                        geometry.origin.as_slice(),
+                        geometry.spacing,
+                        geometry.dims,
+                        fixed.origin.as_slice(),
+                        fixed.spacing,
+                        fixed.dims
+                    ),
+                ));
+            }
+        }
+        let name = format!("{:06}", self.next_index);
+        // Until a frame is in, the geometry attributes are (re)written with each try, so a
+        // failed first append cannot leave a grid that no frame has.
+        let new_geometry = self.geometry.is_none().then_some(geometry);
+        append_group(&self.path, &name, frame.step, frame.time, |file, group| {
+            if let Some(g) = new_geometry {
+                write_geometry(file, &g)?;
+            }
+            write_fields(group, frame)
+        })
+        .map_err(|(action, message)| IoError::Hdf5 {
+            path: self.path.clone(),
+            action,
+            message,
+        })?;
+        self.geometry = Some(geometry);
+        self.next_index += 1;
+        Ok(())
+    }
+
+    /// Number of frames appended so far.
+    pub fn len(&self) -> u64 {
+        self.next_index
+    }
+
+    /// True before the first frame.
+    pub fn is_empty(&self) -> bool {
+        self.next_index == 0
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+fn write_geometry(root: &Group, g: &Geometry) -> Result<(), Failure> {
+    for name in ["origin", "spacing", "dims"] {
+        // A failed earlier try may have left some of them.
+        let what = || format!("replacing root attribute {name:?}");
+        if ctx(root.attr_names(), what)?.iter().any(|n| n == name) {
+            ctx(root.delete_attr(name), what)?;
+        }
+    }
+    write_array_attr(root, "origin", &[g.origin.x, g.origin.y, g.origin.z])?;
+    write_scalar_attr(root, "spacing", &g.spacing)?;
+    write_array_attr(root, "dims", &g.dims.map(|n| n as u64))
+}
+
+fn write_array_attr<T: hdf5::H5Type>(loc: &Group, name: &str, v: &[T]) -> Result<(), Failure> {
+    let what = || format!("writing attribute {name:?}");
+    let attr = ctx(loc.new_attr::<T>().shape(v.len()).create(name), what)?;
+    ctx(attr.write_raw(v), what)
+}
+
+fn write_fields(group: &Group, frame: &GridFrame) -> Result<(), Failure> {
+    let [nx, ny, nz] = frame.dims;
+    for field in &frame.fields {
+        let what = || format!("writing dataset {:?}", field.name);
+        // The identity order is the view's own [i, j, k] C order, which is h5py's.
+        let values = field.data.flatten(|v| v);
+        let builder = group.new_dataset::<Real>();
+        let ds = match field.data {
+            GridFieldData::Scalar(_) => ctx(builder.shape((nx, ny, nz)).create(field.name), what)?,
+            GridFieldData::Vector(_) => {
+                ctx(builder.shape((nx, ny, nz, 3)).create(field.name), what)?
+            }
+        };
+        ctx(ds.as_writer().write_raw(&values), what)?;
+    }
+    Ok(())
+}

@@ -35,10 +35,18 @@ fn main() -> Result<(), eddy::grid::SolveError> {
         tolerance: 1e-6,
         max_iterations: 200,
     };
+    // `cargo bench --bench grid_poisson -- 64 128` picks sizes (default 32 64 128).
+    let mut sizes: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    if sizes.is_empty() {
+        sizes = vec![32, 64, 128];
+    }
     println!("threads: {}", rayon::current_num_threads());
     println!("| solve | n^3 | levels | iterations | build (ms) | solve (ms) | ms / iteration |");
     println!("|---|---|---|---|---|---|---|");
-    for n in [32, 64, 128] {
+    for &n in &sizes {
         let cells = sphere_box(n);
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let rhs = Array3::from_shape_fn((n, n, n), |_| rng.random::<f64>() * 2.0 - 1.0);
@@ -62,7 +70,7 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             best * 1e3 / stats.iterations as f64
         );
     }
-    for n in [32, 64, 128] {
+    for &n in &sizes {
         let unknown = sphere_box(n).map(|&c| c == CellKind::Fluid);
         let boundary = DiffusionBoundary {
             periodic: [false; 3],
@@ -79,7 +87,7 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             best = best.min(t.elapsed().as_secs_f64());
         }
         println!(
-            "| diffusion a=1e4 (build included) | {n} | {} | {} | - | {:.1} | {:.2} |",
+            "| diffusion a=1e4 (with build) | {n} | {} | {} | - | {:.1} | {:.2} |",
             stats.levels,
             stats.iterations,
             best * 1e3,

@@ -6,7 +6,7 @@
 //! cost grows with the number of runs, not of cells.
 
 use super::layout::Layout;
-use super::stencil::{Problem, FLUID};
+use super::stencil::{DirichletTable, Problem, FLUID};
 
 /// A run of unknowns `[start, start + len)` (flat indices) in singular component `component`.
 #[derive(Clone, Copy, Debug)]
@@ -40,7 +40,7 @@ fn union(parent: &mut [usize], a: usize, b: usize) {
 }
 
 impl SingularComponents {
-    pub fn new(p: &Problem) -> Self {
+    pub fn new(p: &Problem, dirichlet: &DirichletTable) -> Self {
         let l: Layout = p.layout;
         let nz = l.n[2];
         // Runs of each row, as (k0, k1), and the first run of each row.
@@ -97,14 +97,12 @@ impl SingularComponents {
             }
         }
         let mut anchored = vec![false; runs.len()];
-        for i in 0..l.n[0] {
-            for j in 0..l.n[1] {
-                for r in row_runs(i * l.n[1] + j) {
-                    let (k0, k1) = runs[r];
-                    if (k0..k1).any(|k| p.dirichlet_weights([i, j, k]).iter().any(|&d| d > 0)) {
-                        let root = find(&mut parent, r);
-                        anchored[root] = true;
-                    }
+        for row in 0..l.rows() {
+            for r in row_runs(row) {
+                let (k0, k1) = runs[r];
+                if (k0..k1).any(|k| dirichlet.get(row * nz + k) != [0; 3]) {
+                    let root = find(&mut parent, r);
+                    anchored[root] = true;
                 }
             }
         }

@@ -79,8 +79,9 @@ pub fn solve_diffusion(
         shift: 1.0,
         scale: a,
     };
-    let stencil = FineStencil::new(&problem);
-    let mut multigrid = Multigrid::new(&problem, &stencil);
+    let dirichlet = problem.dirichlet_table();
+    let stencil = FineStencil::new(&problem, &dirichlet);
+    let mut multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
     let mut work = Workspace::new(layout.len());
     let old: Vec<f64> = x.iter().copied().collect();
     for (idx, (b, xi)) in work.b.iter_mut().zip(work.x.iter_mut()).enumerate() {

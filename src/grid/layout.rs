@@ -31,9 +31,9 @@ impl Layout {
         self.n[0] * self.n[1]
     }
 
-    /// Cells in one x-slab.
+    /// Cells in one x-slab (at least 1, so that it can size chunks of an empty grid).
     pub fn slab(&self) -> usize {
-        self.n[1] * self.n[2]
+        (self.n[1] * self.n[2]).max(1)
     }
 
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {

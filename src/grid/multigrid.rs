@@ -20,14 +20,16 @@
 
 use super::layout::Layout;
 use super::stencil::{
-    for_each_slab, neighbour_sum, CoarseCoefficients, Coefficients, FineCoefficients, FineStencil,
-    Problem, DIRICHLET, FLUID, PARALLEL_MIN_CELLS, SOLID,
+    for_each_slab, CoarseCoefficients, Coefficients, DirichletTable, FineCoefficients, FineStencil,
+    Problem, Row, DIRICHLET, FLUID, PARALLEL_MIN_CELLS, SOLID,
 };
 use super::transfer::Transfer;
 use rayon::prelude::*;
 
-/// Gauss–Seidel sweeps before and after the coarse correction on every level.
-const SMOOTHING_SWEEPS: usize = 2;
+/// Gauss–Seidel sweeps before and after the coarse correction on the finest level (its sweeps
+/// dominate the cost of a cycle) and on the coarse levels.
+const FINE_SWEEPS: usize = 2;
+const COARSE_SWEEPS: usize = 2;
 /// Symmetric sweep pairs on the coarsest level (a few dozen cells): close to an exact solve.
 const COARSEST_SWEEPS: usize = 20;
 /// Coarsening stops once no axis is longer than this.
@@ -74,45 +76,82 @@ impl SharedSlice {
 /// One colour class of a Gauss–Seidel sweep: `x_c = (b_c + scale * sum_j w_cj x_j) / d_c`.
 fn relax_class<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32], class: usize) {
     assert_eq!(x.len(), l.len(), "smoother buffer does not match its level");
+    if x.is_empty() {
+        return;
+    }
     let (group, parity) = (class / 2, class % 2);
     let xs = SharedSlice::new(x);
     let scale = coef.scale();
+    let z_groups = l.group_of(2, l.n[2] - 1) > 0;
     for_each_slab(l, |i| {
         for j in 0..l.n[1] {
             let gij = l.group_of(0, i) + l.group_of(1, j);
-            if gij > group {
+            if gij > group || gij + usize::from(z_groups) < group {
                 continue;
             }
-            let nb = l.row_neighbours(i, j);
+            let row = Row::new(l, i, j);
             for k in ((i + j + parity) % 2..l.n[2]).step_by(2) {
-                if gij + l.group_of(2, k) != group {
+                if z_groups && gij + l.group_of(2, k) != group {
                     continue;
                 }
-                let c = nb.base + k;
-                let kz = (l.step(2, k, false), l.step(2, k, true));
+                let c = row.base() + k;
                 // SAFETY: indices come from the layout (in range); the neighbours read are of
                 // other colour classes than `c`, which this class never writes.
-                let s: f32 = neighbour_sum(&nb, k, kz, coef, |m| unsafe { xs.read(m) });
+                let s: f32 = row.face_sum(k, coef, |m| unsafe { xs.read(m) });
                 unsafe { xs.write(c, (b[c] + scale * s) * coef.inv_diagonal(c)) };
             }
         }
     });
 }
 
-/// `sweeps` Gauss–Seidel sweeps, classes in increasing order (`forward`) or the reverse.
-fn smooth<C: Coefficients>(
-    l: &Layout,
-    coef: &C,
-    b: &[f32],
-    x: &mut [f32],
-    forward: bool,
-    sweeps: usize,
-) {
-    let classes = 2 * l.colour_groups();
-    for _ in 0..sweeps {
-        for c in 0..classes {
-            relax_class(l, coef, b, x, if forward { c } else { classes - 1 - c });
+/// The first colour class of a sweep from a zero initial guess, which needs no neighbours:
+/// `x = b / d` on class 0 and `x = 0` elsewhere, in one contiguous pass.
+fn relax_first_from_zero<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32]) {
+    let slab = |(i, xs): (usize, &mut [f32])| {
+        for j in 0..l.n[1] {
+            let gij = l.group_of(0, i) + l.group_of(1, j);
+            for k in 0..l.n[2] {
+                let local = j * l.n[2] + k;
+                let c = i * l.slab() + local;
+                let first = (i + j + k) % 2 == 0 && gij + l.group_of(2, k) == 0;
+                xs[local] = if first {
+                    b[c] * coef.inv_diagonal(c)
+                } else {
+                    0.0
+                };
+            }
         }
+    };
+    if l.len() >= PARALLEL_MIN_CELLS {
+        x.par_chunks_mut(l.slab()).enumerate().for_each(slab);
+    } else {
+        x.chunks_mut(l.slab()).enumerate().for_each(slab);
+    }
+}
+
+/// Pre-smoothing from a zero initial guess: `sweeps` Gauss–Seidel sweeps, classes in
+/// increasing order.
+fn presmooth<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32], sweeps: usize) {
+    let classes = 2 * l.colour_groups();
+    relax_first_from_zero(l, coef, b, x);
+    for c in 1..classes * sweeps {
+        relax_class(l, coef, b, x, c % classes);
+    }
+}
+
+/// One forward sweep from the current `x` (the coarsest level's repeated symmetric sweeps).
+fn presmooth_continue<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32]) {
+    for c in 0..2 * l.colour_groups() {
+        relax_class(l, coef, b, x, c);
+    }
+}
+
+/// Post-smoothing: `sweeps` sweeps with the classes in decreasing order (the adjoint of
+/// [`presmooth`], which keeps the V-cycle symmetric).
+fn postsmooth<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32], sweeps: usize) {
+    let classes = 2 * l.colour_groups();
+    for c in (0..classes * sweeps).rev() {
+        relax_class(l, coef, b, x, c % classes);
     }
 }
 
@@ -121,11 +160,10 @@ fn residual<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &[f32], r: &mut
     let scale = coef.scale();
     let slab = |(i, rs): (usize, &mut [f32])| {
         for j in 0..l.n[1] {
-            let nb = l.row_neighbours(i, j);
+            let row = Row::new(l, i, j);
             for k in 0..l.n[2] {
-                let c = nb.base + k;
-                let kz = (l.step(2, k, false), l.step(2, k, true));
-                let s: f32 = neighbour_sum(&nb, k, kz, coef, |m| x[m]);
+                let c = row.base() + k;
+                let s: f32 = row.face_sum(k, coef, |m| x[m]);
                 rs[j * l.n[2] + k] = b[c] - coef.diagonal(c) * x[c] + scale * s;
             }
         }
@@ -151,6 +189,7 @@ trait LevelView: Sync {
 struct FineView<'a> {
     problem: &'a Problem,
     stencil: &'a FineStencil,
+    dirichlet: &'a DirichletTable,
 }
 
 impl LevelView for FineView<'_> {
@@ -161,13 +200,10 @@ impl LevelView for FineView<'_> {
         self.problem.kinds[idx]
     }
     fn upper(&self, axis: usize, idx: usize) -> f32 {
-        f32::from((self.stencil.code[idx] >> axis) & 1) * self.problem.scale as f32
+        f32::from(u8::from(self.stencil.upper_face(axis, idx))) * self.problem.scale as f32
     }
     fn dirichlet(&self, axis: usize, idx: usize) -> f32 {
-        let l = self.problem.layout;
-        let (ij, k) = (idx / l.n[2], idx % l.n[2]);
-        let c = [ij / l.n[1], ij % l.n[1], k];
-        f32::from(self.problem.dirichlet_weights(c)[axis]) * self.problem.scale as f32
+        f32::from(self.dirichlet.get(idx)[axis]) * self.problem.scale as f32
     }
     fn shift(&self, idx: usize) -> f32 {
         if self.problem.kinds[idx] == FLUID {
@@ -353,13 +389,17 @@ pub(crate) struct Multigrid {
 }
 
 impl Multigrid {
-    pub fn new(problem: &Problem, stencil: &FineStencil) -> Self {
+    pub fn new(problem: &Problem, stencil: &FineStencil, dirichlet: &DirichletTable) -> Self {
         let mut levels = vec![Level::new(problem.layout, problem.kinds.clone(), None)];
         let done = |l: &Layout| l.n.iter().all(|&n| n <= COARSEST_MAX_SIDE);
         if done(&problem.layout) {
             return Self { levels };
         }
-        let (mut op, mut factors) = coarsen(&FineView { problem, stencil });
+        let (mut op, mut factors) = coarsen(&FineView {
+            problem,
+            stencil,
+            dirichlet,
+        });
         loop {
             let fine = levels.last_mut().expect("the finest level always exists");
             fine.down = Some(Transfer::new(
@@ -405,18 +445,24 @@ fn cycle(levels: &mut [Level], stencil: &FineStencil) {
         .split_first_mut()
         .expect("cycle on an empty hierarchy");
     let l = level.layout;
-    level.x.fill(0.0);
+    let sweeps = if level.coef.is_none() {
+        FINE_SWEEPS
+    } else {
+        COARSE_SWEEPS
+    };
     let Some(coarse) = coarser.first_mut() else {
         with_coef!(level, stencil, |c| {
-            for _ in 0..COARSEST_SWEEPS {
-                smooth(&l, c, &level.b, &mut level.x, true, 1);
-                smooth(&l, c, &level.b, &mut level.x, false, 1);
+            presmooth(&l, c, &level.b, &mut level.x, 1);
+            postsmooth(&l, c, &level.b, &mut level.x, 1);
+            for _ in 1..COARSEST_SWEEPS {
+                presmooth_continue(&l, c, &level.b, &mut level.x);
+                postsmooth(&l, c, &level.b, &mut level.x, 1);
             }
         });
         return;
     };
     with_coef!(level, stencil, |c| {
-        smooth(&l, c, &level.b, &mut level.x, true, SMOOTHING_SWEEPS);
+        presmooth(&l, c, &level.b, &mut level.x, sweeps);
         residual(&l, c, &level.b, &level.x, &mut level.r);
     });
     let down = level
@@ -428,12 +474,11 @@ fn cycle(levels: &mut [Level], stencil: &FineStencil) {
     let coarse = &mut coarser[0];
     let kinds = &level.kinds;
     down.prolong_add(&mut coarse.x, &mut level.x, |f| kinds[f] == FLUID);
-    with_coef!(level, stencil, |c| smooth(
+    with_coef!(level, stencil, |c| postsmooth(
         &l,
         c,
         &level.b,
         &mut level.x,
-        false,
-        SMOOTHING_SWEEPS
+        sweeps
     ));
 }

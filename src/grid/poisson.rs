@@ -234,9 +234,10 @@ impl PoissonSystem {
             shift: 0.0,
             scale: 1.0,
         };
-        let stencil = FineStencil::new(&problem);
-        let multigrid = Multigrid::new(&problem, &stencil);
-        let singular = SingularComponents::new(&problem);
+        let dirichlet = problem.dirichlet_table();
+        let stencil = FineStencil::new(&problem, &dirichlet);
+        let multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
+        let singular = SingularComponents::new(&problem, &dirichlet);
         Self {
             stencil,
             multigrid,

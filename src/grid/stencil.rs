@@ -8,9 +8,10 @@
 //! weight: 0 for a no-flux wall, 1 for a ghost cell held at zero, 2 for a mirror ghost (the value
 //! -x_i, a zero-value wall half a cell outside).
 //!
-//! The fine operator packs one byte per cell: bits 0..3 say whether the face to the upper
-//! neighbour along x, y, z couples two unknowns, bits 3..7 hold the diagonal count (unknown and
-//! Dirichlet neighbours plus side weights, at most 12), bit 7 marks an unknown.
+//! The fine operator packs two bytes per cell: bit `2 * axis + up` says whether that face couples
+//! two unknowns, bits 6..10 hold the diagonal count (unknown and Dirichlet neighbours plus side
+//! weights, at most 12), bit 10 marks an unknown. Cells with all six faces coupled (most of a
+//! fluid region) take a fast path with no weights at all.
 
 use super::layout::{Layout, RowNeighbours};
 use rayon::prelude::*;
@@ -20,8 +21,9 @@ pub(crate) const SOLID: u8 = 0;
 pub(crate) const FLUID: u8 = 1;
 pub(crate) const DIRICHLET: u8 = 2;
 
-const FLUID_BIT: u8 = 1 << 7;
-const COUNT_SHIFT: u32 = 3;
+const FACES: u16 = 0x3f;
+const COUNT_SHIFT: u32 = 6;
+const FLUID_BIT: u16 = 1 << 10;
 
 /// Grids with fewer cells than this are processed on one thread (spawning costs more).
 pub(crate) const PARALLEL_MIN_CELLS: usize = 1 << 14;
@@ -63,14 +65,39 @@ impl Problem {
         d
     }
 
+    /// Per-axis Dirichlet weights of every cell, computed once for the builders.
+    pub fn dirichlet_table(&self) -> DirichletTable {
+        let l = self.layout;
+        let open_side =
+            (0..3).any(|a| !l.periodic[a] && self.side_weight[a].iter().any(|&w| w > 0));
+        if !open_side && !self.kinds.contains(&DIRICHLET) {
+            return DirichletTable(None);
+        }
+        let mut t = vec![[0u8; 3]; l.len()];
+        let fill = |(i, slab): (usize, &mut [[u8; 3]])| {
+            for j in 0..l.n[1] {
+                for k in 0..l.n[2] {
+                    slab[j * l.n[2] + k] = self.dirichlet_weights([i, j, k]);
+                }
+            }
+        };
+        if l.len() >= PARALLEL_MIN_CELLS {
+            t.par_chunks_mut(l.slab()).enumerate().for_each(fill);
+        } else {
+            t.chunks_mut(l.slab()).enumerate().for_each(fill);
+        }
+        DirichletTable(Some(t))
+    }
+
     /// The packed byte of cell `(i, j, k)` (see the module documentation).
-    fn code(&self, c: [usize; 3]) -> u8 {
+    fn code(&self, c: [usize; 3], dirichlet: &DirichletTable) -> u16 {
         let l = &self.layout;
-        if self.kinds[l.index(c[0], c[1], c[2])] != FLUID {
+        let idx = l.index(c[0], c[1], c[2]);
+        if self.kinds[idx] != FLUID {
             return 0;
         }
-        let mut bits = 0u8;
-        let mut count: u8 = self.dirichlet_weights(c).iter().sum();
+        let mut bits = 0u16;
+        let mut count: u16 = dirichlet.get(idx).iter().map(|&d| u16::from(d)).sum();
         for axis in 0..3 {
             for up in [false, true] {
                 if let Some(s) = l.step(axis, c[axis], up) {
@@ -78,14 +105,22 @@ impl Problem {
                     nb[axis] = s;
                     if self.kinds[l.index(nb[0], nb[1], nb[2])] == FLUID {
                         count += 1;
-                        if up {
-                            bits |= 1 << axis;
-                        }
+                        bits |= 1 << (2 * axis + usize::from(up));
                     }
                 }
             }
         }
         FLUID_BIT | (count << COUNT_SHIFT) | bits
+    }
+}
+
+/// Per-axis Dirichlet weights of the cells (`None`: zero everywhere).
+pub(crate) struct DirichletTable(Option<Vec<[u8; 3]>>);
+
+impl DirichletTable {
+    #[inline]
+    pub fn get(&self, idx: usize) -> [u8; 3] {
+        self.0.as_ref().map_or([0; 3], |t| t[idx])
     }
 }
 
@@ -103,6 +138,16 @@ pub(crate) trait Coefficients: Sync {
     /// Weight of the face between cell `idx` and its upper neighbour along `axis`, before
     /// [`Coefficients::scale`].
     fn upper(&self, axis: usize, idx: usize) -> f32;
+    /// Weight of the face between cell `idx` and its lower neighbour `below` along `axis`.
+    #[inline(always)]
+    fn lower(&self, axis: usize, _idx: usize, below: usize) -> f32 {
+        self.upper(axis, below)
+    }
+    /// Whether all six faces of `idx` have unit weight (the sum needs no weights).
+    #[inline(always)]
+    fn unit_faces(&self, _idx: usize) -> bool {
+        false
+    }
     /// Factor on the neighbour sum.
     fn scale(&self) -> f32;
     fn diagonal(&self, idx: usize) -> f32;
@@ -110,60 +155,103 @@ pub(crate) trait Coefficients: Sync {
     fn inv_diagonal(&self, idx: usize) -> f32;
 }
 
-/// `sum_j w_ij v_j` over the six faces of cell `base + k` of a row (unscaled).
-#[inline(always)]
-pub(crate) fn neighbour_sum<V, C>(
-    nb: &RowNeighbours,
-    k: usize,
-    kz: (Option<usize>, Option<usize>),
-    coef: &C,
-    get: impl Fn(usize) -> V,
-) -> V
-where
-    V: Copy + Add<Output = V> + Mul<Output = V> + From<f32>,
-    C: Coefficients + ?Sized,
-{
-    let c = nb.base + k;
-    let mut s = V::from(0.0);
-    if let Some(r) = nb.xp {
-        s = s + V::from(coef.upper(0, c)) * get(r + k);
+/// Flat offsets of a row and its neighbour rows; a missing neighbour row is replaced by the row
+/// itself, with a zero mask on the lower faces (upper faces to nothing have zero weight).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Row {
+    base: usize,
+    nz: usize,
+    xm: usize,
+    xp: usize,
+    ym: usize,
+    yp: usize,
+    mask_xm: f32,
+    mask_ym: f32,
+    /// The lower z neighbour of k = 0 (the last cell on a periodic axis).
+    z_low: Option<usize>,
+}
+
+impl Row {
+    pub fn new(l: &Layout, i: usize, j: usize) -> Self {
+        let nb: RowNeighbours = l.row_neighbours(i, j);
+        let mask = |o: Option<usize>| if o.is_some() { 1.0 } else { 0.0 };
+        Self {
+            base: nb.base,
+            nz: l.n[2],
+            xm: nb.xm.unwrap_or(nb.base),
+            xp: nb.xp.unwrap_or(nb.base),
+            ym: nb.ym.unwrap_or(nb.base),
+            yp: nb.yp.unwrap_or(nb.base),
+            mask_xm: mask(nb.xm),
+            mask_ym: mask(nb.ym),
+            z_low: l.step(2, 0, false),
+        }
     }
-    if let Some(r) = nb.xm {
-        s = s + V::from(coef.upper(0, r + k)) * get(r + k);
+
+    pub fn base(&self) -> usize {
+        self.base
     }
-    if let Some(r) = nb.yp {
-        s = s + V::from(coef.upper(1, c)) * get(r + k);
+
+    /// `sum_j w_ij v_j` over the six faces of cell `base + k` (unscaled).
+    #[inline(always)]
+    pub fn face_sum<V, C>(&self, k: usize, coef: &C, get: impl Fn(usize) -> V) -> V
+    where
+        V: Copy + Add<Output = V> + Mul<Output = V> + From<f32>,
+        C: Coefficients + ?Sized,
+    {
+        let c = self.base + k;
+        let (zm, mask_zm) = if k > 0 {
+            (c - 1, 1.0)
+        } else {
+            match self.z_low {
+                Some(kk) => (self.base + kk, 1.0),
+                None => (c, 0.0),
+            }
+        };
+        let zp = if k + 1 < self.nz {
+            c + 1
+        } else if self.z_low.is_some() {
+            self.base
+        } else {
+            c
+        };
+        if coef.unit_faces(c) {
+            return get(self.xp + k)
+                + get(self.xm + k)
+                + get(self.yp + k)
+                + get(self.ym + k)
+                + get(zp)
+                + get(zm);
+        }
+        let up = |axis: usize| V::from(coef.upper(axis, c));
+        let low = |axis: usize, below: usize, mask: f32| V::from(mask * coef.lower(axis, c, below));
+        up(0) * get(self.xp + k)
+            + low(0, self.xm + k, self.mask_xm) * get(self.xm + k)
+            + up(1) * get(self.yp + k)
+            + low(1, self.ym + k, self.mask_ym) * get(self.ym + k)
+            + up(2) * get(zp)
+            + low(2, zm, mask_zm) * get(zm)
     }
-    if let Some(r) = nb.ym {
-        s = s + V::from(coef.upper(1, r + k)) * get(r + k);
-    }
-    if let Some(kk) = kz.1 {
-        s = s + V::from(coef.upper(2, c)) * get(nb.base + kk);
-    }
-    if let Some(kk) = kz.0 {
-        s = s + V::from(coef.upper(2, nb.base + kk)) * get(nb.base + kk);
-    }
-    s
 }
 
 /// The fine operator, one byte per cell, applied in f64 by the outer CG.
 #[derive(Clone, Debug)]
 pub(crate) struct FineStencil {
     pub layout: Layout,
-    pub code: Vec<u8>,
+    code: Vec<u16>,
     pub scale: f64,
     /// Diagonal by `code >> 3` (unknown bit and count).
     diag: [f64; 32],
 }
 
 impl FineStencil {
-    pub fn new(p: &Problem) -> Self {
+    pub fn new(p: &Problem, dirichlet: &DirichletTable) -> Self {
         let l = p.layout;
-        let mut code = vec![0u8; l.len()];
-        let fill = |(i, slab): (usize, &mut [u8])| {
+        let mut code = vec![0u16; l.len()];
+        let fill = |(i, slab): (usize, &mut [u16])| {
             for j in 0..l.n[1] {
                 for k in 0..l.n[2] {
-                    slab[j * l.n[2] + k] = p.code([i, j, k]);
+                    slab[j * l.n[2] + k] = p.code([i, j, k], dirichlet);
                 }
             }
         };
@@ -188,6 +276,11 @@ impl FineStencil {
         self.code[idx] & FLUID_BIT != 0
     }
 
+    /// Whether the face of `idx` to its upper neighbour along `axis` couples two unknowns.
+    pub fn upper_face(&self, axis: usize, idx: usize) -> bool {
+        self.code[idx] & (1 << (2 * axis + 1)) != 0
+    }
+
     /// `y = A x`, and returns `x . y` (the CG needs both; fused to read `x` once).
     pub fn apply_dot(&self, x: &[f64], y: &mut [f64]) -> f64 {
         let l = self.layout;
@@ -195,11 +288,10 @@ impl FineStencil {
         let slab = |(i, ys): (usize, &mut [f64])| {
             let mut dot = 0.0;
             for j in 0..l.n[1] {
-                let nb = l.row_neighbours(i, j);
+                let row = Row::new(&l, i, j);
                 for k in 0..l.n[2] {
-                    let c = nb.base + k;
-                    let kz = (l.step(2, k, false), l.step(2, k, true));
-                    let s: f64 = neighbour_sum(&nb, k, kz, &coef, |m| x[m]);
+                    let c = row.base + k;
+                    let s: f64 = row.face_sum(k, &coef, |m| x[m]);
                     let v =
                         self.diag[usize::from(self.code[c] >> COUNT_SHIFT)] * x[c] - self.scale * s;
                     ys[j * l.n[2] + k] = v;
@@ -218,7 +310,7 @@ impl FineStencil {
 
 /// The fine operator seen by the f32 multigrid smoother.
 pub(crate) struct FineCoefficients<'a> {
-    code: &'a [u8],
+    code: &'a [u16],
     scale: f32,
     diag: [f32; 32],
     inv: [f32; 32],
@@ -250,7 +342,15 @@ impl<'a> FineCoefficients<'a> {
 impl Coefficients for FineCoefficients<'_> {
     #[inline(always)]
     fn upper(&self, axis: usize, idx: usize) -> f32 {
-        f32::from((self.code[idx] >> axis) & 1)
+        f32::from((self.code[idx] >> (2 * axis + 1)) & 1)
+    }
+    #[inline(always)]
+    fn lower(&self, axis: usize, idx: usize, _below: usize) -> f32 {
+        f32::from((self.code[idx] >> (2 * axis)) & 1)
+    }
+    #[inline(always)]
+    fn unit_faces(&self, idx: usize) -> bool {
+        self.code[idx] & FACES == FACES
     }
     #[inline(always)]
     fn scale(&self) -> f32 {

@@ -184,7 +184,7 @@ impl Transfer {
     /// `fine_x += T E coarse_x` on the fine unknowns. Writes the extension into the solid cells
     /// of `coarse_x` (which hold zero and are reset before the next use).
     pub fn prolong_add(
-        &self,
+        &mut self,
         coarse_x: &mut [f32],
         fine_x: &mut [f32],
         fine_unknown: impl Fn(usize) -> bool + Sync,
@@ -195,31 +195,43 @@ impl Transfer {
         let (f, c) = (self.fine, self.coarse);
         let [ax, ay, az] = &self.axes;
         let coarse_x = &*coarse_x;
-        let slab = |(i, xs): (usize, &mut [f32])| {
+        // Per fine row: interpolate in x and y into a coarse-length row of `tmp`, then in z.
+        let slab = |(i, (xs, ts)): (usize, (&mut [f32], &mut [f32]))| {
             for j in 0..f.n[1] {
-                let base = (i * f.n[1] + j) * f.n[2];
-                let row = &mut xs[j * f.n[2]..(j + 1) * f.n[2]];
+                let t = &mut ts[j * c.n[2]..(j + 1) * c.n[2]];
+                t.fill(0.0);
                 for &(cx, wx) in &ax.up[i] {
                     for &(cy, wy) in &ay.up[j] {
                         let w = wx * wy;
                         if w == 0.0 {
                             continue;
                         }
-                        let src = &coarse_x[c.index(cx, cy, 0)..c.index(cx, cy, 0) + c.n[2]];
-                        for (k, (x, pairs)) in row.iter_mut().zip(&az.up).enumerate() {
-                            if fine_unknown(base + k) {
-                                *x += w
-                                    * (pairs[0].1 * src[pairs[0].0] + pairs[1].1 * src[pairs[1].0]);
-                            }
+                        let start = c.index(cx, cy, 0);
+                        for (t, s) in t.iter_mut().zip(&coarse_x[start..start + c.n[2]]) {
+                            *t += w * s;
                         }
+                    }
+                }
+                let base = f.index(i, j, 0);
+                let row = &mut xs[j * f.n[2]..(j + 1) * f.n[2]];
+                for (k, (x, p)) in row.iter_mut().zip(&az.up).enumerate() {
+                    if fine_unknown(base + k) {
+                        *x += p[0].1 * t[p[0].0] + p[1].1 * t[p[1].0];
                     }
                 }
             }
         };
+        let chunks = fine_x
+            .par_chunks_mut(f.slab())
+            .zip(self.tmp.par_chunks_mut(f.n[1] * c.n[2]));
         if f.len() >= PARALLEL_MIN_CELLS {
-            fine_x.par_chunks_mut(f.slab()).enumerate().for_each(slab);
+            chunks.enumerate().for_each(slab);
         } else {
-            fine_x.chunks_mut(f.slab()).enumerate().for_each(slab);
+            fine_x
+                .chunks_mut(f.slab())
+                .zip(self.tmp.chunks_mut(f.n[1] * c.n[2]))
+                .enumerate()
+                .for_each(slab);
         }
     }
 }

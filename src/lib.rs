@@ -7,6 +7,7 @@
 
 pub mod bench;
 pub mod geometry;
+pub mod grid;
 pub mod io;
 pub mod metrics;
 pub mod run;

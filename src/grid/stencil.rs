@@ -1,0 +1,394 @@
+//! The 7-point operator `shift * I + scale * L` on a cell grid, where `L` is the unit-spacing
+//! Laplacian with the positive semi-definite sign (the pressure and the diffusion systems differ
+//! only in `shift` and `scale`).
+//!
+//! Cells are unknowns (`FLUID`), fixed at a Dirichlet value (`DIRICHLET`) or not part of the
+//! problem (`SOLID`, no flux). A Dirichlet cell next to an unknown adds `scale` to its diagonal
+//! (the fixed value goes to the right-hand side), a side of the grid adds `scale` times its
+//! weight: 0 for a no-flux wall, 1 for a ghost cell held at zero, 2 for a mirror ghost (the value
+//! -x_i, a zero-value wall half a cell outside).
+//!
+//! The fine operator packs two bytes per cell: bit `2 * axis + up` says whether that face couples
+//! two unknowns, bits 6..10 hold the diagonal count (unknown and Dirichlet neighbours plus side
+//! weights, at most 12), bit 10 marks an unknown. Cells with all six faces coupled (most of a
+//! fluid region) take a fast path with no weights at all.
+
+use super::layout::{Layout, RowNeighbours};
+use rayon::prelude::*;
+use std::ops::{Add, Mul};
+
+pub(crate) const SOLID: u8 = 0;
+pub(crate) const FLUID: u8 = 1;
+pub(crate) const DIRICHLET: u8 = 2;
+
+const FACES: u16 = 0x3f;
+const COUNT_SHIFT: u32 = 6;
+const FLUID_BIT: u16 = 1 << 10;
+
+/// Grids with fewer cells than this are processed on one thread (spawning costs more).
+pub(crate) const PARALLEL_MIN_CELLS: usize = 1 << 14;
+
+/// The system to solve, as the public entry points describe it.
+#[derive(Clone, Debug)]
+pub(crate) struct Problem {
+    pub layout: Layout,
+    /// `SOLID`, `FLUID` or `DIRICHLET` per cell, flat C order.
+    pub kinds: Vec<u8>,
+    /// Dirichlet weight of the ghost beyond each side, `[axis][0 = low, 1 = high]`.
+    pub side_weight: [[u8; 2]; 3],
+    pub shift: f64,
+    pub scale: f64,
+}
+
+impl Problem {
+    /// Dirichlet weight along each axis of cell `(i, j, k)` (zero for cells that are not unknowns).
+    pub fn dirichlet_weights(&self, c: [usize; 3]) -> [u8; 3] {
+        let mut d = [0u8; 3];
+        if self.kinds[self.layout.index(c[0], c[1], c[2])] != FLUID {
+            return d;
+        }
+        for (axis, da) in d.iter_mut().enumerate() {
+            for (side, up) in [false, true].into_iter().enumerate() {
+                match self.layout.step(axis, c[axis], up) {
+                    Some(s) => {
+                        let mut nb = c;
+                        nb[axis] = s;
+                        if self.kinds[self.layout.index(nb[0], nb[1], nb[2])] == DIRICHLET {
+                            *da += 1;
+                        }
+                    }
+                    None if !self.layout.periodic[axis] => *da += self.side_weight[axis][side],
+                    None => {}
+                }
+            }
+        }
+        d
+    }
+
+    /// Per-axis Dirichlet weights of every cell, computed once for the builders.
+    pub fn dirichlet_table(&self) -> DirichletTable {
+        let l = self.layout;
+        let open_side =
+            (0..3).any(|a| !l.periodic[a] && self.side_weight[a].iter().any(|&w| w > 0));
+        if !open_side && !self.kinds.contains(&DIRICHLET) {
+            return DirichletTable(None);
+        }
+        let mut t = vec![[0u8; 3]; l.len()];
+        let fill = |(i, slab): (usize, &mut [[u8; 3]])| {
+            for j in 0..l.n[1] {
+                for k in 0..l.n[2] {
+                    slab[j * l.n[2] + k] = self.dirichlet_weights([i, j, k]);
+                }
+            }
+        };
+        if l.len() >= PARALLEL_MIN_CELLS {
+            t.par_chunks_mut(l.slab()).enumerate().for_each(fill);
+        } else {
+            t.chunks_mut(l.slab()).enumerate().for_each(fill);
+        }
+        DirichletTable(Some(t))
+    }
+
+    /// The packed byte of cell `(i, j, k)` (see the module documentation).
+    fn code(&self, c: [usize; 3], dirichlet: &DirichletTable) -> u16 {
+        let l = &self.layout;
+        let idx = l.index(c[0], c[1], c[2]);
+        if self.kinds[idx] != FLUID {
+            return 0;
+        }
+        let mut bits = 0u16;
+        let mut count: u16 = dirichlet.get(idx).iter().map(|&d| u16::from(d)).sum();
+        for axis in 0..3 {
+            for up in [false, true] {
+                if let Some(s) = l.step(axis, c[axis], up) {
+                    let mut nb = c;
+                    nb[axis] = s;
+                    if self.kinds[l.index(nb[0], nb[1], nb[2])] == FLUID {
+                        count += 1;
+                        bits |= 1 << (2 * axis + usize::from(up));
+                    }
+                }
+            }
+        }
+        FLUID_BIT | (count << COUNT_SHIFT) | bits
+    }
+}
+
+/// Per-axis Dirichlet weights of the cells (`None`: zero everywhere).
+pub(crate) struct DirichletTable(Option<Vec<[u8; 3]>>);
+
+impl DirichletTable {
+    #[inline]
+    pub fn get(&self, idx: usize) -> [u8; 3] {
+        self.0.as_ref().map_or([0; 3], |t| t[idx])
+    }
+}
+
+/// Runs `f(i)` for every x-slab `i < n`, in parallel when the grid is large enough.
+pub(crate) fn for_each_slab(layout: &Layout, f: impl Fn(usize) + Sync + Send) {
+    if layout.len() >= PARALLEL_MIN_CELLS {
+        (0..layout.n[0]).into_par_iter().for_each(f);
+    } else {
+        (0..layout.n[0]).for_each(f);
+    }
+}
+
+/// Coefficients of one multigrid level, read cell by cell by the smoothing kernels.
+pub(crate) trait Coefficients: Sync {
+    /// Weight of the face between cell `idx` and its upper neighbour along `axis`, before
+    /// [`Coefficients::scale`].
+    fn upper(&self, axis: usize, idx: usize) -> f32;
+    /// Weight of the face between cell `idx` and its lower neighbour `below` along `axis`.
+    #[inline(always)]
+    fn lower(&self, axis: usize, _idx: usize, below: usize) -> f32 {
+        self.upper(axis, below)
+    }
+    /// Whether all six faces of `idx` have unit weight (the sum needs no weights).
+    #[inline(always)]
+    fn unit_faces(&self, _idx: usize) -> bool {
+        false
+    }
+    /// Factor on the neighbour sum.
+    fn scale(&self) -> f32;
+    fn diagonal(&self, idx: usize) -> f32;
+    /// `1 / diagonal`, or 0 for cells that are not unknowns (their value stays 0).
+    fn inv_diagonal(&self, idx: usize) -> f32;
+}
+
+/// Flat offsets of a row and its neighbour rows; a missing neighbour row is replaced by the row
+/// itself, with a zero mask on the lower faces (upper faces to nothing have zero weight).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Row {
+    base: usize,
+    nz: usize,
+    xm: usize,
+    xp: usize,
+    ym: usize,
+    yp: usize,
+    mask_xm: f32,
+    mask_ym: f32,
+    /// The lower z neighbour of k = 0 (the last cell on a periodic axis).
+    z_low: Option<usize>,
+}
+
+impl Row {
+    pub fn new(l: &Layout, i: usize, j: usize) -> Self {
+        let nb: RowNeighbours = l.row_neighbours(i, j);
+        let mask = |o: Option<usize>| if o.is_some() { 1.0 } else { 0.0 };
+        Self {
+            base: nb.base,
+            nz: l.n[2],
+            xm: nb.xm.unwrap_or(nb.base),
+            xp: nb.xp.unwrap_or(nb.base),
+            ym: nb.ym.unwrap_or(nb.base),
+            yp: nb.yp.unwrap_or(nb.base),
+            mask_xm: mask(nb.xm),
+            mask_ym: mask(nb.ym),
+            z_low: l.step(2, 0, false),
+        }
+    }
+
+    pub fn base(&self) -> usize {
+        self.base
+    }
+
+    /// `sum_j w_ij v_j` over the six faces of cell `base + k` (unscaled).
+    #[inline(always)]
+    pub fn face_sum<V, C>(&self, k: usize, coef: &C, get: impl Fn(usize) -> V) -> V
+    where
+        V: Copy + Add<Output = V> + Mul<Output = V> + From<f32>,
+        C: Coefficients + ?Sized,
+    {
+        let c = self.base + k;
+        let (zm, mask_zm) = if k > 0 {
+            (c - 1, 1.0)
+        } else {
+            match self.z_low {
+                Some(kk) => (self.base + kk, 1.0),
+                None => (c, 0.0),
+            }
+        };
+        let zp = if k + 1 < self.nz {
+            c + 1
+        } else if self.z_low.is_some() {
+            self.base
+        } else {
+            c
+        };
+        if coef.unit_faces(c) {
+            return get(self.xp + k)
+                + get(self.xm + k)
+                + get(self.yp + k)
+                + get(self.ym + k)
+                + get(zp)
+                + get(zm);
+        }
+        let up = |axis: usize| V::from(coef.upper(axis, c));
+        let low = |axis: usize, below: usize, mask: f32| V::from(mask * coef.lower(axis, c, below));
+        up(0) * get(self.xp + k)
+            + low(0, self.xm + k, self.mask_xm) * get(self.xm + k)
+            + up(1) * get(self.yp + k)
+            + low(1, self.ym + k, self.mask_ym) * get(self.ym + k)
+            + up(2) * get(zp)
+            + low(2, zm, mask_zm) * get(zm)
+    }
+}
+
+/// The fine operator, one byte per cell, applied in f64 by the outer CG.
+#[derive(Clone, Debug)]
+pub(crate) struct FineStencil {
+    pub layout: Layout,
+    code: Vec<u16>,
+    pub scale: f64,
+    /// Diagonal by `code >> 3` (unknown bit and count).
+    diag: [f64; 32],
+}
+
+impl FineStencil {
+    pub fn new(p: &Problem, dirichlet: &DirichletTable) -> Self {
+        let l = p.layout;
+        let mut code = vec![0u16; l.len()];
+        let fill = |(i, slab): (usize, &mut [u16])| {
+            for j in 0..l.n[1] {
+                for k in 0..l.n[2] {
+                    slab[j * l.n[2] + k] = p.code([i, j, k], dirichlet);
+                }
+            }
+        };
+        if l.len() >= PARALLEL_MIN_CELLS {
+            code.par_chunks_mut(l.slab()).enumerate().for_each(fill);
+        } else {
+            code.chunks_mut(l.slab()).enumerate().for_each(fill);
+        }
+        let mut diag = [0.0; 32];
+        for (count, d) in diag[16..].iter_mut().enumerate() {
+            *d = p.shift + p.scale * count as f64;
+        }
+        Self {
+            layout: l,
+            code,
+            scale: p.scale,
+            diag,
+        }
+    }
+
+    pub fn is_unknown(&self, idx: usize) -> bool {
+        self.code[idx] & FLUID_BIT != 0
+    }
+
+    /// Whether the face of `idx` to its upper neighbour along `axis` couples two unknowns.
+    pub fn upper_face(&self, axis: usize, idx: usize) -> bool {
+        self.code[idx] & (1 << (2 * axis + 1)) != 0
+    }
+
+    /// `y = A x`, and returns `x . y` (the CG needs both; fused to read `x` once).
+    pub fn apply_dot(&self, x: &[f64], y: &mut [f64]) -> f64 {
+        let l = self.layout;
+        let coef = FineCoefficients::unscaled(self);
+        let slab = |(i, ys): (usize, &mut [f64])| {
+            let mut dot = 0.0;
+            for j in 0..l.n[1] {
+                let row = Row::new(&l, i, j);
+                for k in 0..l.n[2] {
+                    let c = row.base + k;
+                    let s: f64 = row.face_sum(k, &coef, |m| x[m]);
+                    let v =
+                        self.diag[usize::from(self.code[c] >> COUNT_SHIFT)] * x[c] - self.scale * s;
+                    ys[j * l.n[2] + k] = v;
+                    dot += v * x[c];
+                }
+            }
+            dot
+        };
+        if l.len() >= PARALLEL_MIN_CELLS {
+            y.par_chunks_mut(l.slab()).enumerate().map(slab).sum()
+        } else {
+            y.chunks_mut(l.slab()).enumerate().map(slab).sum()
+        }
+    }
+}
+
+/// The fine operator seen by the f32 multigrid smoother.
+pub(crate) struct FineCoefficients<'a> {
+    code: &'a [u16],
+    scale: f32,
+    diag: [f32; 32],
+    inv: [f32; 32],
+}
+
+impl<'a> FineCoefficients<'a> {
+    pub fn new(s: &'a FineStencil) -> Self {
+        let diag = s.diag.map(|d| d as f32);
+        let inv = diag.map(|d| if d > 0.0 { 1.0 / d } else { 0.0 });
+        Self {
+            code: &s.code,
+            scale: s.scale as f32,
+            diag,
+            inv,
+        }
+    }
+
+    /// Face weights without the scale (0 or 1), for the exact f64 apply.
+    fn unscaled(s: &'a FineStencil) -> Self {
+        Self {
+            code: &s.code,
+            scale: 1.0,
+            diag: [0.0; 32],
+            inv: [0.0; 32],
+        }
+    }
+}
+
+impl Coefficients for FineCoefficients<'_> {
+    #[inline(always)]
+    fn upper(&self, axis: usize, idx: usize) -> f32 {
+        f32::from((self.code[idx] >> (2 * axis + 1)) & 1)
+    }
+    #[inline(always)]
+    fn lower(&self, axis: usize, idx: usize, _below: usize) -> f32 {
+        f32::from((self.code[idx] >> (2 * axis)) & 1)
+    }
+    #[inline(always)]
+    fn unit_faces(&self, idx: usize) -> bool {
+        self.code[idx] & FACES == FACES
+    }
+    #[inline(always)]
+    fn scale(&self) -> f32 {
+        self.scale
+    }
+    #[inline(always)]
+    fn diagonal(&self, idx: usize) -> f32 {
+        self.diag[usize::from(self.code[idx] >> COUNT_SHIFT)]
+    }
+    #[inline(always)]
+    fn inv_diagonal(&self, idx: usize) -> f32 {
+        self.inv[usize::from(self.code[idx] >> COUNT_SHIFT)]
+    }
+}
+
+/// Coefficients of a coarse level, stored per cell (the scale is folded into the weights).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CoarseCoefficients {
+    pub upper: [Vec<f32>; 3],
+    pub diag: Vec<f32>,
+    pub inv: Vec<f32>,
+}
+
+impl Coefficients for CoarseCoefficients {
+    #[inline(always)]
+    fn upper(&self, axis: usize, idx: usize) -> f32 {
+        self.upper[axis][idx]
+    }
+    #[inline(always)]
+    fn scale(&self) -> f32 {
+        1.0
+    }
+    #[inline(always)]
+    fn diagonal(&self, idx: usize) -> f32 {
+        self.diag[idx]
+    }
+    #[inline(always)]
+    fn inv_diagonal(&self, idx: usize) -> f32 {
+        self.inv[idx]
+    }
+}

@@ -514,3 +514,51 @@ fn diffusion_converges_for_huge_viscosity_around_an_obstacle() {
         "values left [0, 1]"
     );
 }
+
+#[test]
+fn degenerate_layouts_are_solved() {
+    let s = settings(1e-8);
+    // No cells at all, and no unknowns at all: nothing to do, x is zero.
+    for cells in [
+        Array3::from_elem((0, 4, 4), CellKind::Fluid),
+        Array3::from_elem((3, 4, 5), CellKind::Solid),
+    ] {
+        let mut sys = PoissonSystem::new(&cells, Boundary::closed());
+        let mut x = Array3::from_elem(cells.dim(), 1.0);
+        let stats = sys
+            .solve(&Array3::from_elem(cells.dim(), 1.0), &mut x, &s)
+            .expect("trivial");
+        assert_eq!(stats.iterations, 0);
+        assert!(x.iter().all(|&v| v == 0.0));
+    }
+    // A line of cells with one open end: x_i solves a tridiagonal system; for rhs = e_last the
+    // exact solution is x_i = i + 1 (the open ghost at i = -1 holds 0).
+    let n = 9;
+    let cells = Array3::from_elem((n, 1, 1), CellKind::Fluid);
+    let boundary = Boundary {
+        periodic: [false; 3],
+        sides: [[Side::Open, Side::Wall], [Side::Wall; 2], [Side::Wall; 2]],
+    };
+    let mut sys = PoissonSystem::new(&cells, boundary);
+    let mut rhs = Array3::zeros((n, 1, 1));
+    rhs[(n - 1, 0, 0)] = 1.0;
+    let mut x = Array3::zeros((n, 1, 1));
+    sys.solve(&rhs, &mut x, &s).expect("converges");
+    for i in 0..n {
+        assert!(
+            (x[(i, 0, 0)] - (i + 1) as Real).abs() < 1e-6,
+            "x[{i}] = {}",
+            x[(i, 0, 0)]
+        );
+    }
+    // One fluid cell walled in by solid: a singular component of one cell; x = 0.
+    let mut cells = Array3::from_elem((3, 3, 3), CellKind::Solid);
+    cells[(1, 1, 1)] = CellKind::Fluid;
+    let mut sys = PoissonSystem::new(&cells, boundary);
+    let mut x = Array3::zeros((3, 3, 3));
+    let stats = sys
+        .solve(&Array3::from_elem((3, 3, 3), 2.0), &mut x, &s)
+        .expect("trivial");
+    assert_eq!((stats.singular_components, stats.removed_mean), (1, 2.0));
+    assert_eq!(x[(1, 1, 1)], 0.0);
+}

@@ -14,6 +14,17 @@ use std::time::Instant;
 
 const REPEATS: usize = 3;
 
+/// CPU seconds used so far by this process, all threads (utime + stime of /proc/self/stat, in
+/// the usual 100 Hz clock ticks): on a shared machine wall time measures the neighbours too,
+/// CPU time does not. `None` where /proc is missing.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let after_name = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = after_name.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
 fn sphere_box(n: usize) -> Array3<CellKind> {
     let c = n as f64 / 2.0;
     let r = n as f64 / 4.0;
@@ -30,6 +41,14 @@ fn sphere_box(n: usize) -> Array3<CellKind> {
     })
 }
 
+/// Mean CPU seconds per repeat since `start`, as a table cell.
+fn cpu_per_solve(start: Option<f64>) -> String {
+    match (start, cpu_seconds()) {
+        (Some(a), Some(b)) => format!("{:.2}", (b - a) / REPEATS as f64),
+        _ => "-".into(),
+    }
+}
+
 fn main() -> Result<(), eddy::grid::SolveError> {
     let settings = SolverSettings {
         tolerance: 1e-6,
@@ -44,8 +63,8 @@ fn main() -> Result<(), eddy::grid::SolveError> {
         sizes = vec![32, 64, 128];
     }
     println!("threads: {}", rayon::current_num_threads());
-    println!("| solve | n^3 | levels | iterations | build (ms) | solve (ms) | ms / iteration |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| solve | n^3 | levels | iterations | build (ms) | solve (ms) | ms / iteration | CPU s / solve (all threads) |");
+    println!("|---|---|---|---|---|---|---|---|");
     for &n in &sizes {
         let cells = sphere_box(n);
         let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -55,6 +74,7 @@ fn main() -> Result<(), eddy::grid::SolveError> {
         let build = t.elapsed().as_secs_f64();
         let mut best = f64::INFINITY;
         let mut stats = Default::default();
+        let cpu0 = cpu_seconds();
         for _ in 0..REPEATS {
             let mut x = Array3::zeros((n, n, n));
             let t = Instant::now();
@@ -62,12 +82,13 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             best = best.min(t.elapsed().as_secs_f64());
         }
         println!(
-            "| pressure | {n} | {} | {} | {:.1} | {:.1} | {:.2} |",
+            "| pressure | {n} | {} | {} | {:.1} | {:.1} | {:.2} | {} |",
             stats.levels,
             stats.iterations,
             build * 1e3,
             best * 1e3,
-            best * 1e3 / stats.iterations as f64
+            best * 1e3 / stats.iterations as f64,
+            cpu_per_solve(cpu0)
         );
     }
     for &n in &sizes {
@@ -80,6 +101,7 @@ fn main() -> Result<(), eddy::grid::SolveError> {
         let x0 = Array3::from_shape_fn((n, n, n), |_| rng.random::<f64>());
         let mut best = f64::INFINITY;
         let mut stats = Default::default();
+        let cpu0 = cpu_seconds();
         for _ in 0..REPEATS {
             let mut x = x0.clone();
             let t = Instant::now();
@@ -87,11 +109,12 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             best = best.min(t.elapsed().as_secs_f64());
         }
         println!(
-            "| diffusion a=1e4 (with build) | {n} | {} | {} | - | {:.1} | {:.2} |",
+            "| diffusion a=1e4 (with build) | {n} | {} | {} | - | {:.1} | {:.2} | {} |",
             stats.levels,
             stats.iterations,
             best * 1e3,
-            best * 1e3 / stats.iterations as f64
+            best * 1e3 / stats.iterations as f64,
+            cpu_per_solve(cpu0)
         );
     }
     Ok(())

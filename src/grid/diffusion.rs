@@ -7,11 +7,12 @@ use super::layout::Layout;
 use super::multigrid::Multigrid;
 use super::pcg::{self, Workspace};
 use super::poisson::{
-    check_settings, check_shape, coordinates, finish, SolveError, SolveStats, SolverSettings,
+    check_settings, check_shape, coordinates, finish, load, SolveError, SolveStats, SolverSettings,
 };
 use super::stencil::{FineStencil, Problem, DIRICHLET, FLUID};
 use crate::Real;
 use ndarray::Array3;
+use rayon::prelude::*;
 
 /// Condition beyond the array on one side of a non-periodic axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,10 +84,12 @@ pub fn solve_diffusion(
     let stencil = FineStencil::new(&problem, &dirichlet);
     let mut multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
     let mut work = Workspace::new(layout.len());
+    load(&layout, "x", x, |i| problem.kinds[i] == FLUID, &mut work.x)?;
     let old: Vec<f64> = x.iter().copied().collect();
-    for (idx, (b, xi)) in work.b.iter_mut().zip(work.x.iter_mut()).enumerate() {
+    // b = x_old + a * (sum of fixed neighbours) on the unknowns.
+    let rhs = |(idx, b): (usize, &mut f64)| {
         if problem.kinds[idx] != FLUID {
-            continue;
+            return;
         }
         let c = coordinates(&layout, idx);
         let mut fixed = 0.0;
@@ -103,8 +106,8 @@ pub fn solve_diffusion(
             }
         }
         *b = old[idx] + a * fixed;
-        *xi = old[idx];
-    }
+    };
+    work.b.par_iter_mut().enumerate().for_each(rhs);
     let stats = SolveStats {
         levels: multigrid.depth(),
         ..Default::default()

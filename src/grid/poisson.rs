@@ -13,6 +13,7 @@ use super::pcg::{self, Workspace};
 use super::stencil::{FineStencil, Problem, DIRICHLET, FLUID, SOLID};
 use crate::Real;
 use ndarray::Array3;
+use rayon::prelude::*;
 
 pub use super::diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide};
 
@@ -150,22 +151,47 @@ pub(crate) fn load(
     l: &Layout,
     what: &'static str,
     src: &Array3<Real>,
-    unknown: impl Fn(usize) -> bool,
+    unknown: impl Fn(usize) -> bool + Sync,
     dst: &mut [f64],
 ) -> Result<(), SolveError> {
-    for (idx, (d, &s)) in dst.iter_mut().zip(src.iter()).enumerate() {
-        if !unknown(idx) {
-            *d = 0.0;
-        } else if s.is_finite() {
-            *d = s;
-        } else {
-            return Err(SolveError::NonFinite {
-                what,
-                cell: coordinates(l, idx),
-            });
-        }
+    match src.as_slice() {
+        Some(src) => dst
+            .par_chunks_mut(l.slab())
+            .zip(src.par_chunks(l.slab()))
+            .enumerate()
+            .for_each(|(i, (d, s))| copy_masked(i * l.slab(), d, s.iter(), &unknown)),
+        None => copy_masked(0, dst, src.iter(), &unknown),
     }
-    Ok(())
+    match dst.iter().position(|v| !v.is_finite()) {
+        Some(idx) => Err(SolveError::NonFinite {
+            what,
+            cell: coordinates(l, idx),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// `dst[i] = src[i]` where `unknown(offset + i)`, else 0.
+fn copy_masked<'a>(
+    offset: usize,
+    dst: &mut [f64],
+    src: impl Iterator<Item = &'a Real>,
+    unknown: &impl Fn(usize) -> bool,
+) {
+    for (idx, (d, &s)) in (offset..).zip(dst.iter_mut().zip(src)) {
+        *d = if unknown(idx) { s } else { 0.0 };
+    }
+}
+
+/// Copies `src` into `dst` (same shape as the layout).
+pub(crate) fn store(l: &Layout, src: &[f64], dst: &mut Array3<Real>) {
+    match dst.as_slice_mut() {
+        Some(d) => d
+            .par_chunks_mut(l.slab())
+            .zip(src.par_chunks(l.slab()))
+            .for_each(|(d, s)| d.copy_from_slice(s)),
+        None => dst.iter_mut().zip(src).for_each(|(d, &s)| *d = s),
+    }
 }
 
 /// Checks the settings.
@@ -297,7 +323,7 @@ impl PoissonSystem {
             finish(o, stats)
         };
         self.singular.remove_means(&mut self.work.x);
-        x.iter_mut().zip(&self.work.x).for_each(|(x, &v)| *x = v);
+        store(&l, &self.work.x, x);
         result
     }
 

@@ -1,15 +1,32 @@
-//! The MAC grid's linear solvers: the pressure Poisson system (MGPCG) and implicit diffusion.
+//! The MAC-grid fluid: staggered velocities on cubic cells, semi-Lagrangian and MacCormack
+//! advection, implicit viscosity, MGPCG pressure projection with walls, obstacles, inflow,
+//! open and periodic sides, smoke with buoyancy, vorticity confinement, running averages and
+//! probes (Pfaff et al. 2009, sections 1 and 5; the precomputation runs it with raised viscosity).
 
+pub mod advect;
+pub mod average;
+pub mod boundary;
 mod components;
 pub mod diffusion;
+pub mod forces;
+pub mod interp;
 mod layout;
+pub mod mac;
 mod multigrid;
 mod pcg;
 pub mod poisson;
+pub mod project;
+pub mod solver;
 mod stencil;
 mod transfer;
+pub mod viscosity;
 
+pub use average::RunningAverage;
+pub use boundary::Boundaries;
 pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide};
+pub use interp::Stagger;
+pub use mac::MacGrid;
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,
 };
+pub use solver::{GridError, GridSolver, GridStepStats};

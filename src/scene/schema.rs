@@ -28,6 +28,9 @@ pub struct Scene {
     /// The SPH fluid, if the scene has one.
     #[serde(default)]
     pub fluid: Option<Fluid>,
+    /// The MAC-grid fluid, if the scene has one.
+    #[serde(default)]
+    pub grid: Option<super::grid::Grid>,
     /// The container the fluid sits in (its surface is sampled with boundary particles).
     #[serde(default)]
     pub container: Option<Body>,

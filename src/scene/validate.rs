@@ -66,6 +66,7 @@ impl Scene {
             }
         }
         self.validate_solvers(&c)?;
+        self.validate_grid(&c)?;
         self.validate_probes(&c)?;
         c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
         let mut metrics = HashSet::new();
@@ -198,12 +199,12 @@ impl Scene {
 }
 
 /// Builds the errors of one file, so each rule is one line.
-struct Checker<'a> {
-    file: &'a Path,
+pub(super) struct Checker<'a> {
+    pub(super) file: &'a Path,
 }
 
 impl Checker<'_> {
-    fn invalid(
+    pub(super) fn invalid(
         &self,
         key: impl Into<String>,
         value: impl fmt::Display,
@@ -218,7 +219,7 @@ impl Checker<'_> {
     }
 
     /// Checks that `value` is finite and inside `allowed`.
-    fn num(&self, key: &str, value: Real, allowed: Interval) -> Result<(), SceneError> {
+    pub(super) fn num(&self, key: &str, value: Real, allowed: Interval) -> Result<(), SceneError> {
         if value.is_finite() && allowed.contains(value) {
             Ok(())
         } else {
@@ -226,7 +227,7 @@ impl Checker<'_> {
         }
     }
 
-    fn vec3(&self, key: &str, v: [Real; 3]) -> Result<(), SceneError> {
+    pub(super) fn vec3(&self, key: &str, v: [Real; 3]) -> Result<(), SceneError> {
         for (axis, &x) in v.iter().enumerate() {
             self.num(&format!("{key}[{axis}]"), x, Interval::any())?;
         }
@@ -278,7 +279,7 @@ impl Checker<'_> {
         self.motion(&format!("{key}.motion"), &body.motion)
     }
 
-    fn shape(&self, key: &str, shape: &Shape) -> Result<(), SceneError> {
+    pub(super) fn shape(&self, key: &str, shape: &Shape) -> Result<(), SceneError> {
         let positive =
             |name: &str, v: Real| self.num(&format!("{key}.{name}"), v, Interval::gt(0.0));
         match shape {
@@ -353,7 +354,7 @@ enum Bound {
 }
 
 /// An allowed range of a number, with an optional note on where its ends come from.
-struct Interval {
+pub(super) struct Interval {
     lo: Bound,
     hi: Bound,
     note: Option<String>,
@@ -363,26 +364,26 @@ impl Interval {
     fn new(lo: Bound, hi: Bound) -> Self {
         Self { lo, hi, note: None }
     }
-    fn any() -> Self {
+    pub(super) fn any() -> Self {
         Self::new(Bound::Unbounded, Bound::Unbounded)
     }
-    fn gt(lo: Real) -> Self {
+    pub(super) fn gt(lo: Real) -> Self {
         Self::new(Bound::Open(lo), Bound::Unbounded)
     }
-    fn ge(lo: Real) -> Self {
+    pub(super) fn ge(lo: Real) -> Self {
         Self::new(Bound::Closed(lo), Bound::Unbounded)
     }
-    fn le(hi: Real) -> Self {
+    pub(super) fn le(hi: Real) -> Self {
         Self::new(Bound::Unbounded, Bound::Closed(hi))
     }
-    fn open_closed(lo: Real, hi: Real) -> Self {
+    pub(super) fn open_closed(lo: Real, hi: Real) -> Self {
         Self::new(Bound::Open(lo), Bound::Closed(hi))
     }
-    fn closed(lo: Real, hi: Real) -> Self {
+    pub(super) fn closed(lo: Real, hi: Real) -> Self {
         Self::new(Bound::Closed(lo), Bound::Closed(hi))
     }
     /// Says where a bound comes from, e.g. "`domain.min[0]`".
-    fn note(mut self, note: &str) -> Self {
+    pub(super) fn note(mut self, note: &str) -> Self {
         self.note = Some(note.to_owned());
         self
     }

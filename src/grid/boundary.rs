@@ -1,0 +1,242 @@
+//! Boundary conditions of the MAC grid: the domain's sides and the obstacles voxelised onto its
+//! cells. A face is *fixed* when its velocity is prescribed (a wall, an inflow, or a face touching
+//! an obstacle cell, which carries the obstacle's velocity there); the projection and the
+//! viscosity solve leave fixed faces alone, which is the solid velocity boundary condition.
+
+use ndarray::{s, Array3, Axis, Zip};
+
+use super::diffusion::{DiffusionBoundary, DiffusionSide};
+use super::mac::MacGrid;
+use super::poisson::{Boundary, CellKind, Side};
+use crate::geometry::RigidBody;
+use crate::scene::GridSide;
+use crate::{Point3, Real, Vec3};
+
+/// Owner value of a cell no obstacle covers.
+const FLUID: u16 = u16::MAX;
+
+/// The grid's boundary state at one time.
+#[derive(Debug, Clone)]
+pub struct Boundaries {
+    /// The domain's sides, `[axis][0 = min, 1 = max]`.
+    pub sides: [[GridSide; 2]; 3],
+    /// Index of the obstacle whose inside holds each cell centre, or `u16::MAX` for fluid.
+    owner: Array3<u16>,
+    /// Faces whose velocity is prescribed, per component.
+    pub fixed: [Array3<bool>; 3],
+    /// The prescribed velocity of fixed faces (0 elsewhere), per component.
+    pub fixed_value: [Array3<Real>; 3],
+}
+
+impl Boundaries {
+    /// Voxelises `bodies` at time `t` and classifies every face.
+    pub fn new(grid: &MacGrid, sides: [[GridSide; 2]; 3], bodies: &[RigidBody], t: Real) -> Self {
+        let owner = voxelize(grid, bodies, t);
+        let mut b = Self {
+            sides,
+            owner,
+            fixed: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
+            fixed_value: std::array::from_fn(|a| Array3::zeros(grid.u[a].raw_dim())),
+        };
+        b.classify_faces(grid, bodies, t);
+        b
+    }
+
+    /// Whether cell `idx` is inside an obstacle.
+    pub fn is_solid(&self, idx: [usize; 3]) -> bool {
+        self.owner[idx] != FLUID
+    }
+
+    /// True for the cells the fluid occupies.
+    pub fn fluid_mask(&self) -> Array3<bool> {
+        self.owner.mapv(|o| o == FLUID)
+    }
+
+    /// Number of fluid cells.
+    pub fn fluid_cells(&self) -> usize {
+        self.owner.iter().filter(|&&o| o == FLUID).count()
+    }
+
+    /// The obstacle covering cell `idx`, if any.
+    pub fn owner(&self, idx: [usize; 3]) -> Option<usize> {
+        let o = self.owner[idx];
+        (o != FLUID).then_some(o as usize)
+    }
+
+    /// The cell kinds of the pressure solve.
+    pub fn cell_kinds(&self) -> Array3<CellKind> {
+        self.owner.mapv(|o| {
+            if o == FLUID {
+                CellKind::Fluid
+            } else {
+                CellKind::Solid
+            }
+        })
+    }
+
+    /// Periodic axes.
+    pub fn periodic(&self) -> [bool; 3] {
+        self.sides.map(|p| p[0] == GridSide::Periodic)
+    }
+
+    /// The sides as the pressure solve sees them: open sides hold p = 0, every other side is a
+    /// prescribed normal velocity (no flux through it beyond what the fixed face carries).
+    pub fn pressure_boundary(&self) -> Boundary {
+        Boundary {
+            periodic: self.periodic(),
+            sides: self.sides.map(|pair| {
+                pair.map(|s| match s {
+                    GridSide::Open => Side::Open,
+                    _ => Side::Wall,
+                })
+            }),
+        }
+    }
+
+    /// The sides as the viscosity solve of component `a` sees them, with the wall value of
+    /// `a` on each side: no-slip walls and inflows hold their tangential velocity at the wall
+    /// (a mirror ghost about that value); slip walls and open sides have no shear. The sides
+    /// normal to `a` are fixed faces themselves (or open, zero-gradient).
+    pub fn diffusion_boundary(&self, a: usize) -> (DiffusionBoundary, [[Real; 2]; 3]) {
+        let condition = |b: usize, side: GridSide| match side {
+            _ if b == a => (DiffusionSide::Neumann, 0.0),
+            GridSide::Wall => (DiffusionSide::Mirror, 0.0),
+            GridSide::MovingWall(v) | GridSide::Inflow(v) => (DiffusionSide::Mirror, v[a]),
+            GridSide::Slip | GridSide::Open | GridSide::Periodic => (DiffusionSide::Neumann, 0.0),
+        };
+        let both: [[(DiffusionSide, Real); 2]; 3] =
+            std::array::from_fn(|b| self.sides[b].map(|s| condition(b, s)));
+        (
+            DiffusionBoundary {
+                periodic: self.periodic(),
+                sides: both.map(|pair| pair.map(|c| c.0)),
+            },
+            both.map(|pair| pair.map(|c| c.1)),
+        )
+    }
+
+    /// Writes the prescribed velocity onto the fixed faces, extrapolates the normal velocity
+    /// through open sides (zero gradient, before the projection corrects it), and makes the
+    /// periodic copies agree.
+    pub fn apply(&self, grid: &mut MacGrid) {
+        for a in 0..3 {
+            Zip::from(&mut grid.u[a])
+                .and(&self.fixed[a])
+                .and(&self.fixed_value[a])
+                .par_for_each(|u, &f, &v| {
+                    if f {
+                        *u = v;
+                    }
+                });
+            let n = grid.dims[a];
+            for (s, side) in self.sides[a].iter().enumerate() {
+                if *side != GridSide::Open || n < 2 {
+                    continue;
+                }
+                let (face, inner) = if s == 0 { (0, 1) } else { (n, n - 1) };
+                let inner_values = grid.u[a].index_axis(Axis(a), inner).to_owned();
+                let fixed = self.fixed[a].index_axis(Axis(a), face);
+                Zip::from(grid.u[a].index_axis_mut(Axis(a), face))
+                    .and(&inner_values)
+                    .and(fixed)
+                    .for_each(|u, &v, &f| {
+                        if !f {
+                            *u = v;
+                        }
+                    });
+            }
+        }
+        grid.sync_periodic();
+    }
+
+    /// Marks the fixed faces of every component and their velocities.
+    fn classify_faces(&mut self, grid: &MacGrid, bodies: &[RigidBody], t: Real) {
+        let dims = grid.dims;
+        for a in 0..3 {
+            let n = dims[a];
+            let periodic = self.sides[a][0] == GridSide::Periodic;
+            let sides = self.sides[a];
+            let owner = &self.owner;
+            Zip::indexed(&mut self.fixed[a])
+                .and(&mut self.fixed_value[a])
+                .par_for_each(|(i, j, k), fixed, value| {
+                    let idx = [i, j, k];
+                    let face = idx[a];
+                    let cell_at = |c: usize| {
+                        let mut cell = idx;
+                        cell[a] = c;
+                        owner[cell]
+                    };
+                    // The cells on either side; None beyond a non-periodic side.
+                    let (left, right) = if periodic {
+                        let l = (face + n - 1) % n;
+                        (Some(cell_at(l)), Some(cell_at(face % n)))
+                    } else {
+                        (
+                            (face > 0).then(|| cell_at(face - 1)),
+                            (face < n).then(|| cell_at(face)),
+                        )
+                    };
+                    let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
+                    let prescribed = if let Some(body) = solid {
+                        let x = Point3::from(grid.face_center(a, idx));
+                        Some(bodies[body as usize].velocity_at(t, &x)[a])
+                    } else if left.is_none() || right.is_none() {
+                        let side = sides[usize::from(left.is_some())];
+                        match side {
+                            GridSide::Wall | GridSide::Slip => Some(0.0),
+                            GridSide::MovingWall(v) | GridSide::Inflow(v) => Some(v[a]),
+                            GridSide::Open | GridSide::Periodic => None,
+                        }
+                    } else {
+                        None
+                    };
+                    *fixed = prescribed.is_some();
+                    *value = prescribed.unwrap_or(0.0);
+                });
+        }
+    }
+}
+
+/// The obstacle index of every cell whose centre lies inside one (the last body listed wins
+/// where bodies overlap), `FLUID` elsewhere. Only the cells under each body's bounding box are
+/// tested.
+fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real) -> Array3<u16> {
+    let mut owner = Array3::from_elem(grid.dims, FLUID);
+    for (index, body) in bodies.iter().enumerate() {
+        let (lo, hi) = world_aabb(body, t);
+        let range = |a: usize| {
+            let g0 = ((lo[a] - grid.origin[a]) / grid.dx - 0.5).floor().max(0.0) as usize;
+            let g1 = ((hi[a] - grid.origin[a]) / grid.dx + 0.5).ceil().max(0.0) as usize;
+            g0.min(grid.dims[a])..g1.min(grid.dims[a])
+        };
+        let (rx, ry, rz) = (range(0), range(1), range(2));
+        let (x0, y0, z0) = (rx.start, ry.start, rz.start);
+        Zip::indexed(owner.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), o| {
+            let c = Point3::from(grid.cell_center([x0 + i, y0 + j, z0 + k]));
+            if body.signed_distance(t, &c) < 0.0 {
+                *o = index as u16;
+            }
+        });
+    }
+    owner
+}
+
+/// The world-space bounding box of a body at time `t`.
+fn world_aabb(body: &RigidBody, t: Real) -> (Vec3, Vec3) {
+    let (lo, hi) = body.local_aabb();
+    let pose = body.pose(t);
+    let mut min = Vec3::repeat(Real::INFINITY);
+    let mut max = Vec3::repeat(Real::NEG_INFINITY);
+    for corner in 0..8 {
+        let p = Point3::new(
+            if corner & 1 == 0 { lo.x } else { hi.x },
+            if corner & 2 == 0 { lo.y } else { hi.y },
+            if corner & 4 == 0 { lo.z } else { hi.z },
+        );
+        let w = pose * p;
+        min = min.inf(&w.coords);
+        max = max.sup(&w.coords);
+    }
+    (min, max)
+}

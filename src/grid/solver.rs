@@ -1,0 +1,546 @@
+//! One step of the MAC-grid fluid: advection, forces, sources, implicit viscosity and pressure
+//! projection, in the order of Stam's stable fluids with the boundary conditions re-imposed
+//! before each solve.
+
+use std::time::Instant;
+
+use ndarray::{Array3, Zip};
+
+use super::advect::{advect, advect_velocity};
+use super::average::RunningAverage;
+use super::boundary::Boundaries;
+use super::forces::{add_cell_acceleration, buoyancy, confinement};
+use super::mac::MacGrid;
+use super::poisson::{PoissonSystem, SolveError, SolverSettings};
+use super::project::{max_divergence, project};
+use super::viscosity::diffuse_component;
+use crate::geometry::{GeometryError, RigidBody};
+use crate::scene::{Advection, Body, Grid, Motion, Scene, SmokeSource, ViscosityScheme};
+use crate::{Point3, Real, Vec3};
+
+/// Largest CFL number (u_max dt / dx) a step may reach before the run is called unstable.
+const CFL_BLOWUP: Real = 50.0;
+
+/// Why the grid solver could not be built or could not go on.
+#[derive(Debug, thiserror::Error)]
+pub enum GridError {
+    #[error("scene has no [grid] section")]
+    NoGrid,
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    #[error(
+        "obstacle '{body}' covers every cell of the grid: the domain ({domain:?} m) is smaller \
+         than the obstacle"
+    )]
+    NoFluid { body: String, domain: [Real; 3] },
+    #[error("{what} solve failed at t = {time:.6} s (step {step}): {source}")]
+    Solve {
+        what: &'static str,
+        time: Real,
+        step: u64,
+        #[source]
+        source: SolveError,
+    },
+    #[error(
+        "the grid flow went unstable at t = {time:.6} s (step {step}): {what}; lower time.cfl \
+         or time.dt_max"
+    )]
+    Unstable { time: Real, step: u64, what: String },
+}
+
+/// What one step did, with the wall time of its parts.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GridStepStats {
+    pub dt: Real,
+    /// u_max dt / dx.
+    pub cfl: Real,
+    pub pressure_iterations: usize,
+    pub pressure_residual: Real,
+    pub viscosity_iterations: usize,
+    /// Largest |div u| over fluid cells after the projection, 1/s.
+    pub max_divergence: Real,
+    /// |u^{n+1} - u^n| / (|u^n| dt), 1/s.
+    pub change_rate: Real,
+    pub advect_seconds: f64,
+    pub project_seconds: f64,
+    pub total_seconds: f64,
+}
+
+/// The settings a step reads, taken from the scene once.
+#[derive(Debug, Clone)]
+struct Settings {
+    advection: Advection,
+    reflection: bool,
+    viscosity: Real,
+    viscosity_scheme: ViscosityScheme,
+    density: Real,
+    confinement: Real,
+    up: Vec3,
+    cfl: Real,
+    dt_min: Real,
+    dt_max: Real,
+    fixed_dt: Option<Real>,
+    pressure: SolverSettings,
+}
+
+/// Smoke density, temperature and their sources.
+#[derive(Debug, Clone)]
+pub struct SmokeState {
+    pub density: Array3<Real>,
+    pub temperature: Option<Array3<Real>>,
+    buoyancy: Real,
+    heat_buoyancy: Real,
+    sources: Vec<SourceRegion>,
+}
+
+/// The cells and faces under a smoke source.
+#[derive(Debug, Clone)]
+struct SourceRegion {
+    cells: Array3<bool>,
+    faces: Option<([Array3<bool>; 3], Vec3)>,
+    density: Real,
+    temperature: Real,
+}
+
+/// The MAC-grid fluid of a scene.
+pub struct GridSolver {
+    pub mac: MacGrid,
+    pub bounds: Boundaries,
+    pub bodies: Vec<RigidBody>,
+    /// Pressure of the last projection, Pa (with the scene's `grid.density`).
+    pub pressure: Array3<Real>,
+    pub smoke: Option<SmokeState>,
+    pub average: Option<(Real, RunningAverage)>,
+    system: PoissonSystem,
+    /// p dt / (rho dx) of the last projection: the next solve's warm start.
+    scaled_pressure: Array3<Real>,
+    settings: Settings,
+    time: Real,
+    step: u64,
+}
+
+impl GridSolver {
+    /// Builds the grid of `scene` with its obstacles `bodies`, at rest or at the initial velocity.
+    pub fn new(scene: &Scene, bodies: Vec<RigidBody>) -> Result<Self, GridError> {
+        let grid = scene.grid.as_ref().ok_or(GridError::NoGrid)?;
+        let dx = grid.spacing(scene);
+        let sides = grid.boundary.sides();
+        let periodic = sides.map(|p| p[0] == crate::scene::GridSide::Periodic);
+        let mut mac = MacGrid::new(grid.resolution, dx, Vec3::from(scene.domain.min), periodic);
+        for (a, u) in mac.u.iter_mut().enumerate() {
+            u.fill(grid.initial_velocity[a]);
+        }
+        let bounds = Boundaries::new(&mac, sides, &bodies, 0.0);
+        if bounds.fluid_cells() == 0 {
+            let body = bodies
+                .first()
+                .map(|b| b.name().to_owned())
+                .unwrap_or_default();
+            let domain = std::array::from_fn(|a| scene.domain.max[a] - scene.domain.min[a]);
+            return Err(GridError::NoFluid { body, domain });
+        }
+        bounds.apply(&mut mac);
+        let g = Vec3::from(scene.gravity);
+        let up = if g.norm() > 0.0 {
+            -g.normalize()
+        } else {
+            Vec3::y()
+        };
+        let settings = Settings {
+            advection: grid.advection,
+            reflection: grid.reflection,
+            viscosity_scheme: grid.viscosity_scheme,
+            viscosity: scene.viscosity.kinematic,
+            density: grid.density,
+            confinement: grid.vorticity_confinement,
+            up,
+            cfl: scene.time.cfl,
+            dt_min: scene.time.dt_min,
+            dt_max: scene.time.dt_max,
+            fixed_dt: scene.time.dt,
+            pressure: SolverSettings {
+                tolerance: grid.pressure_tolerance,
+                max_iterations: grid.pressure_max_iterations as usize,
+            },
+        };
+        let smoke = grid
+            .smoke
+            .as_ref()
+            .map(|s| smoke_state(&mac, grid, s))
+            .transpose()?;
+        let system = PoissonSystem::new(&bounds.cell_kinds(), bounds.pressure_boundary());
+        let average = grid
+            .average_from
+            .map(|start| (start, RunningAverage::new(&mac)));
+        Ok(Self {
+            pressure: Array3::zeros(mac.dims),
+            scaled_pressure: Array3::zeros(mac.dims),
+            mac,
+            bounds,
+            bodies,
+            smoke,
+            average,
+            system,
+            settings,
+            time: 0.0,
+            step: 0,
+        })
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> Real {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
+    /// Sets the face velocities from a function of position (then the boundary conditions) and
+    /// projects, so the field starts divergence-free.
+    pub fn set_velocity(&mut self, f: impl Fn(&Vec3) -> Vec3 + Sync) -> Result<(), GridError> {
+        for a in 0..3 {
+            let stagger = self.mac.face_stagger(a);
+            let (dx, origin) = (self.mac.dx, self.mac.origin);
+            Zip::indexed(&mut self.mac.u[a]).par_for_each(|(i, j, k), u| {
+                let g = stagger.position([i, j, k]);
+                *u = f(&(origin + Vec3::new(g[0], g[1], g[2]) * dx))[a];
+            });
+        }
+        self.bounds.apply(&mut self.mac);
+        self.project(1.0).map(|_| ())
+    }
+
+    /// Advances one step.
+    pub fn advance(&mut self, dt_limit: Option<Real>) -> Result<GridStepStats, GridError> {
+        let started = Instant::now();
+        let mut stats = GridStepStats {
+            dt: self.step_size(dt_limit)?,
+            ..Default::default()
+        };
+        let dt = stats.dt;
+        stats.cfl = self.mac.max_face_speed() * dt / self.mac.dx;
+        let before = self.mac.u.clone();
+        if self.bodies.iter().any(RigidBody::is_moving) {
+            let sides = self.bounds.sides;
+            self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
+            self.system =
+                PoissonSystem::new(&self.bounds.cell_kinds(), self.bounds.pressure_boundary());
+        }
+
+        let t0 = Instant::now();
+        let scheme = self.settings.advection;
+        if let Some(smoke) = self.smoke.as_mut() {
+            let stagger = self.mac.cell_stagger();
+            smoke.density = advect(&smoke.density, stagger, &self.mac, dt, scheme);
+            if let Some(t) = smoke.temperature.as_mut() {
+                *t = advect(t, stagger, &self.mac, dt, scheme);
+            }
+        }
+        if self.settings.reflection {
+            self.reflected_update(dt, &mut stats)?;
+        } else {
+            self.mac.u = advect_velocity(&self.mac, dt, scheme);
+            self.body_forces_and_viscosity(dt, &mut stats)?;
+            let t1 = Instant::now();
+            let solve = self.project(dt)?;
+            stats.project_seconds = t1.elapsed().as_secs_f64();
+            stats.pressure_iterations = solve.iterations;
+            stats.pressure_residual = solve.relative_residual;
+        }
+        stats.advect_seconds = t0.elapsed().as_secs_f64() - stats.project_seconds;
+
+        self.time += dt;
+        self.step += 1;
+        stats.max_divergence = max_divergence(&self.mac, &self.bounds.fluid_mask());
+        stats.change_rate = change_rate(&before, &self.mac.u) / dt;
+        if let Some((start, avg)) = self.average.as_mut() {
+            if self.time > *start {
+                avg.add(&self.mac, dt.min(self.time - *start));
+            }
+        }
+        self.check_finite()?;
+        stats.total_seconds = started.elapsed().as_secs_f64();
+        Ok(stats)
+    }
+
+    /// Forces, sources, boundary conditions and viscosity over `dt`, before a projection.
+    fn body_forces_and_viscosity(
+        &mut self,
+        dt: Real,
+        stats: &mut GridStepStats,
+    ) -> Result<(), GridError> {
+        self.apply_forces(dt);
+        self.bounds.apply(&mut self.mac);
+        if self.settings.viscosity > 0.0 {
+            stats.viscosity_iterations = self.diffuse(dt)?;
+        }
+        Ok(())
+    }
+
+    /// The advection–reflection step (Zehnder, Narain and Thomaszewski 2018, Algorithm 1):
+    /// advect half a step and project, reflect the advected field about its projection
+    /// (2 P(u) - u), advect that by the projected field for the second half and project again.
+    /// It costs a second projection and removes most of the energy that the first-order
+    /// advect-then-project splitting loses.
+    fn reflected_update(&mut self, dt: Real, stats: &mut GridStepStats) -> Result<(), GridError> {
+        let scheme = self.settings.advection;
+        let half = 0.5 * dt;
+        self.mac.u = advect_velocity(&self.mac, half, scheme);
+        self.apply_forces(dt);
+        self.bounds.apply(&mut self.mac);
+        let advected = self.mac.u.clone();
+        let t1 = Instant::now();
+        let first = self.project(half)?;
+        let mut elapsed = t1.elapsed().as_secs_f64();
+        let projected = self.mac.clone();
+        for (u, tilde) in self.mac.u.iter_mut().zip(&advected) {
+            Zip::from(u)
+                .and(tilde)
+                .par_for_each(|u, &t| *u = 2.0 * *u - t);
+        }
+        self.mac.u = std::array::from_fn(|a| {
+            advect(
+                &self.mac.u[a],
+                self.mac.face_stagger(a),
+                &projected,
+                half,
+                scheme,
+            )
+        });
+        self.bounds.apply(&mut self.mac);
+        if self.settings.viscosity > 0.0 {
+            stats.viscosity_iterations = self.diffuse(dt)?;
+        }
+        let t2 = Instant::now();
+        let second = self.project(half)?;
+        elapsed += t2.elapsed().as_secs_f64();
+        stats.project_seconds = elapsed;
+        stats.pressure_iterations = first.iterations + second.iterations;
+        stats.pressure_residual = second.relative_residual;
+        Ok(())
+    }
+
+    /// The CFL step, or the fixed step; shortened to `limit` (the end time or next frame).
+    fn step_size(&self, limit: Option<Real>) -> Result<Real, GridError> {
+        let s = &self.settings;
+        let speed = self.mac.max_face_speed();
+        let dt = s.fixed_dt.unwrap_or_else(|| {
+            if speed > 0.0 {
+                (s.cfl * self.mac.dx / speed).min(s.dt_max)
+            } else {
+                s.dt_max
+            }
+        });
+        if dt < s.dt_min {
+            return Err(GridError::Unstable {
+                time: self.time,
+                step: self.step,
+                what: format!(
+                    "the CFL rule needs dt = {dt:.3e} s at speed {speed:.3e} m/s, below time.dt_min = {:.3e} s",
+                    s.dt_min
+                ),
+            });
+        }
+        Ok(limit.map_or(dt, |l| dt.min(l.max(s.dt_min))))
+    }
+
+    /// Buoyancy and vorticity confinement, and the smoke sources.
+    fn apply_forces(&mut self, dt: Real) {
+        if let Some(smoke) = self.smoke.as_mut() {
+            for src in &smoke.sources {
+                set_where(&mut smoke.density, &src.cells, src.density);
+                if let Some(t) = smoke.temperature.as_mut() {
+                    set_where(t, &src.cells, src.temperature);
+                }
+                if let Some((faces, v)) = &src.faces {
+                    for a in 0..3 {
+                        set_where(&mut self.mac.u[a], &faces[a], v[a]);
+                    }
+                }
+            }
+            let fluid = self.bounds.fluid_mask();
+            Zip::from(&mut smoke.density)
+                .and(&fluid)
+                .par_for_each(|s, &f| {
+                    if !f {
+                        *s = 0.0;
+                    }
+                });
+            if smoke.buoyancy != 0.0 || smoke.heat_buoyancy != 0.0 {
+                let lift = buoyancy(
+                    &smoke.density,
+                    smoke.temperature.as_ref(),
+                    smoke.buoyancy,
+                    smoke.heat_buoyancy,
+                    self.settings.up,
+                );
+                add_cell_acceleration(&mut self.mac, &lift, dt);
+            }
+        }
+        if self.settings.confinement > 0.0 {
+            let f = confinement(&self.mac, self.settings.confinement);
+            add_cell_acceleration(&mut self.mac, &f, dt);
+        }
+    }
+
+    /// Backward-Euler viscosity, one solve per component; returns the most iterations any took.
+    fn diffuse(&mut self, dt: Real) -> Result<usize, GridError> {
+        let a = self.settings.viscosity * dt / (self.mac.dx * self.mac.dx);
+        let mut iterations = 0;
+        for c in 0..3 {
+            let stats = diffuse_component(
+                &self.bounds,
+                c,
+                a,
+                self.settings.viscosity_scheme,
+                &mut self.mac.u[c],
+                &self.settings.pressure,
+            )
+            .map_err(|source| self.solve_error("viscosity", source))?;
+            iterations = iterations.max(stats.iterations);
+        }
+        self.mac.sync_periodic();
+        Ok(iterations)
+    }
+
+    /// Projects the velocity and stores the pressure of a step of length `dt`.
+    fn project(&mut self, dt: Real) -> Result<super::poisson::SolveStats, GridError> {
+        let to_pressure = self.settings.density * self.mac.dx / dt;
+        self.scaled_pressure = self.pressure.mapv(|p| p / to_pressure);
+        let stats = project(
+            &mut self.mac,
+            &self.bounds,
+            &mut self.system,
+            &mut self.scaled_pressure,
+            &self.settings.pressure,
+        )
+        .map_err(|source| self.solve_error("pressure", source))?;
+        self.pressure = self.scaled_pressure.mapv(|y| y * to_pressure);
+        Ok(stats)
+    }
+
+    fn solve_error(&self, what: &'static str, source: SolveError) -> GridError {
+        GridError::Solve {
+            what,
+            time: self.time,
+            step: self.step,
+            source,
+        }
+    }
+
+    /// Stops on a non-finite velocity or a CFL number far past any stable step.
+    fn check_finite(&self) -> Result<(), GridError> {
+        let speed = self.mac.max_face_speed();
+        let unstable = |what: String| GridError::Unstable {
+            time: self.time,
+            step: self.step,
+            what,
+        };
+        if !speed.is_finite() || self.mac.u.iter().any(|u| u.iter().any(|x| !x.is_finite())) {
+            return Err(unstable("a face velocity is not finite".into()));
+        }
+        let dt = self.settings.fixed_dt.unwrap_or(self.settings.dt_max);
+        if speed * dt / self.mac.dx > CFL_BLOWUP {
+            return Err(unstable(format!(
+                "speed {speed:.3e} m/s would cross {CFL_BLOWUP} cells per step"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy of the fluid cells, J (with `grid.density`).
+    pub fn kinetic_energy(&self) -> Real {
+        self.settings.density * self.mac.kinetic_energy(&self.bounds.fluid_mask())
+    }
+
+    /// Fluid density, kg/m^3.
+    pub fn density(&self) -> Real {
+        self.settings.density
+    }
+
+    /// Kinematic viscosity, m^2/s.
+    pub fn viscosity(&self) -> Real {
+        self.settings.viscosity
+    }
+}
+
+/// Sets `field` to `value` where `mask` holds.
+fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
+    Zip::from(field).and(mask).par_for_each(|f, &m| {
+        if m {
+            *f = value;
+        }
+    });
+}
+
+/// |after - before| / |before| over all faces (|after| when before is zero).
+fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
+    let (mut diff, mut norm) = (0.0, 0.0);
+    for (b, a) in before.iter().zip(after) {
+        Zip::from(b).and(a).for_each(|&b, &a| {
+            diff += (a - b) * (a - b);
+            norm += b * b;
+        });
+    }
+    if norm > 0.0 {
+        (diff / norm).sqrt()
+    } else {
+        diff.sqrt()
+    }
+}
+
+/// Builds the smoke fields and voxelises the sources (static, in the world frame).
+fn smoke_state(
+    mac: &MacGrid,
+    grid: &Grid,
+    smoke: &crate::scene::Smoke,
+) -> Result<SmokeState, GridError> {
+    let sources = smoke
+        .sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| source_region(mac, s, i))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(SmokeState {
+        density: Array3::zeros(mac.dims),
+        temperature: grid.has_temperature().then(|| Array3::zeros(mac.dims)),
+        buoyancy: smoke.buoyancy,
+        heat_buoyancy: smoke.heat_buoyancy,
+        sources,
+    })
+}
+
+fn source_region(
+    mac: &MacGrid,
+    source: &SmokeSource,
+    index: usize,
+) -> Result<SourceRegion, GridError> {
+    let body = RigidBody::from_scene(
+        &Body {
+            name: Some(format!("smoke source {index}")),
+            shape: source.shape.clone(),
+            position: source.position,
+            rotation: source.rotation,
+            motion: Motion::default(),
+        },
+        index,
+    )?;
+    let inside = |x: Vec3| body.signed_distance(0.0, &Point3::from(x)) <= 0.0;
+    let cells = Array3::from_shape_fn(mac.dims, |(i, j, k)| inside(mac.cell_center([i, j, k])));
+    let faces = source.velocity.map(|v| {
+        let masks = std::array::from_fn(|a| {
+            Array3::from_shape_fn(mac.u[a].raw_dim(), |(i, j, k)| {
+                inside(mac.face_center(a, [i, j, k]))
+            })
+        });
+        (masks, Vec3::from(v))
+    });
+    Ok(SourceRegion {
+        cells,
+        faces,
+        density: source.density,
+        temperature: source.temperature,
+    })
+}

@@ -79,15 +79,19 @@ fn main() -> anyhow::Result<()> {
             );
             let s = run::run_scene(&resolved, &options)
                 .with_context(|| format!("running {}", scene.display()))?;
+            let (count, what) = if s.grid_cells > 0 {
+                (s.grid_cells, "cells")
+            } else {
+                (s.fluid_particles, "fluid particles")
+            };
             eprintln!(
-                "eddy: {} steps to t = {:.4} s in {:.1} s ({} fluid, {} boundary particles, \
-                 {:.2} M particle-steps/s); {} frames in {}",
+                "eddy: {} steps to t = {:.4} s in {:.1} s ({count} {what}, {} boundary particles, \
+                 {:.2} M {what}-steps/s); {} frames in {}",
                 s.steps,
                 s.time,
                 s.wall_seconds,
-                s.fluid_particles,
                 s.boundary_particles,
-                s.steps as f64 * s.fluid_particles as f64 / s.wall_seconds / 1e6,
+                s.steps as f64 * count as f64 / s.wall_seconds / 1e6,
                 s.frames,
                 s.out.display()
             );

@@ -12,6 +12,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod grid;
+
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -24,6 +26,12 @@ pub enum RunError {
     #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
     Unstable {
         cause: Instability,
+        frames: usize,
+        out: PathBuf,
+    },
+    #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
+    Grid {
+        cause: crate::grid::GridError,
         frames: usize,
         out: PathBuf,
     },
@@ -55,6 +63,8 @@ pub struct RunSummary {
     pub frames: usize,
     pub fluid_particles: usize,
     pub boundary_particles: usize,
+    /// Cells of a grid scene (0 for SPH scenes).
+    pub grid_cells: usize,
     pub wall_seconds: f64,
 }
 
@@ -91,9 +101,9 @@ pub fn run(path: &Path, options: &RunOptions) -> Result<RunSummary, RunError> {
 
 /// Runs an already resolved scene.
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
-    if scene.fluid.is_none() {
+    if scene.fluid.is_none() && scene.grid.is_none() {
         return Err(RunError::Unsupported(format!(
-            "scene '{}' has no [fluid]; grid scenes come with the MAC-grid solver",
+            "scene '{}' has neither [fluid] nor [grid]: nothing to simulate",
             scene.name
         )));
     }
@@ -107,6 +117,9 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
     write_atomic(&out.join("scene.toml"), |w| {
         w.write_all(resolved.as_bytes())
     })?;
+    if scene.grid.is_some() {
+        return grid::run_grid(scene, options, &out);
+    }
 
     let plan = Plan::of(scene);
     let started = Instant::now();
@@ -167,6 +180,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
         frames: frames.count,
         fluid_particles: solver.fluid.len(),
         boundary_particles: solver.boundary.len(),
+        grid_cells: 0,
         wall_seconds: started.elapsed().as_secs_f64(),
     })
 }

@@ -15,6 +15,7 @@ pub mod mac;
 mod multigrid;
 mod pcg;
 pub mod poisson;
+pub mod probes;
 pub mod project;
 pub mod solver;
 mod stencil;

@@ -49,6 +49,8 @@ impl ProbeRecorder {
                 Probe::Point { name, .. } => {
                     columns.extend(["p", "vx", "vy", "vz"].map(|c| format!("{name}_{c}")))
                 }
+                // Grid-only probes; validation keeps them out of SPH scenes.
+                Probe::Line { .. } | Probe::Force { .. } => {}
             }
         }
         Ok(Self {
@@ -72,6 +74,7 @@ impl ProbeRecorder {
                         .unwrap_or((Real::NAN, Vec3::repeat(Real::NAN)));
                     self.row.extend([p, v.x, v.y, v.z]);
                 }
+                Probe::Line { .. } | Probe::Force { .. } => {}
             }
         }
         self.csv.row(&self.row)

@@ -201,6 +201,84 @@ impl Grid {
     }
 }
 
+impl Grid {
+    /// The stages a step of this grid runs, for `eddy run --plan`: (name, what it does here).
+    pub fn stages(&self, scene: &Scene) -> Vec<(&'static str, String)> {
+        let mut out = Vec::new();
+        let n = self.resolution;
+        let moving = scene.obstacles.iter().filter(|b| super::plan::is_moving(b));
+        out.push((
+            "grid",
+            format!(
+                "MAC grid {} x {} x {} cells of {} m, {} obstacles ({} moving: re-voxelised every step)",
+                n[0],
+                n[1],
+                n[2],
+                self.spacing(scene),
+                scene.obstacles.len(),
+                moving.count()
+            ),
+        ));
+        let scheme = match self.advection {
+            Advection::SemiLagrangian => "semi-Lagrangian",
+            Advection::Maccormack => "MacCormack",
+        };
+        let scalars = match (&self.smoke, self.has_temperature()) {
+            (Some(_), true) => " and smoke density, temperature",
+            (Some(_), false) => " and smoke density",
+            (None, _) => "",
+        };
+        out.push((
+            "advect",
+            format!(
+                "{scheme} advection of velocity{scalars}{}",
+                if self.reflection {
+                    ", advection-reflection (two projections)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+        let mut forces = Vec::new();
+        if let Some(s) = &self.smoke {
+            forces.push(format!(
+                "smoke sources ({}), buoyancy {}",
+                s.sources.len(),
+                s.buoyancy
+            ));
+        }
+        if self.vorticity_confinement > 0.0 {
+            forces.push(format!(
+                "vorticity confinement {}",
+                self.vorticity_confinement
+            ));
+        }
+        if !forces.is_empty() {
+            out.push(("forces", forces.join(", ")));
+        }
+        if scene.viscosity.kinematic > 0.0 {
+            out.push((
+                "viscosity",
+                format!(
+                    "implicit ({:?}) nu = {} m^2/s, MGPCG per component",
+                    self.viscosity_scheme, scene.viscosity.kinematic
+                ),
+            ));
+        }
+        out.push((
+            "pressure",
+            format!(
+                "MGPCG projection to relative residual {} (at most {} iterations)",
+                self.pressure_tolerance, self.pressure_max_iterations
+            ),
+        ));
+        if let Some(t) = self.average_from {
+            out.push(("average", format!("time-averaged velocity from t = {t} s")));
+        }
+        out
+    }
+}
+
 impl Scene {
     /// Checks the `[grid]` section.
     pub(super) fn validate_grid(&self, c: &Checker) -> Result<(), SceneError> {

@@ -94,8 +94,20 @@ impl Plan {
             );
             push("advect", "positions, then NaN and domain checks".into());
         }
+        if let Some(grid) = &scene.grid {
+            for (name, detail) in grid.stages(scene) {
+                push(name, detail);
+            }
+        }
         let out = &scene.output;
-        if !out.metrics.is_empty() {
+        if scene.grid.is_some() {
+            push(
+                "metrics",
+                "metrics.csv: kinetic energy, max divergence, pressure and viscosity iterations, \
+                 CFL, change rate, stage times"
+                    .into(),
+            );
+        } else if !out.metrics.is_empty() {
             let names: Vec<_> = out.metrics.iter().map(|m| m.column()).collect();
             push("metrics", format!("metrics.csv: {}", names.join(", ")));
         }
@@ -106,7 +118,15 @@ impl Plan {
         if out.vtk {
             push(
                 "vtk",
-                format!("VTK frames + particles.pvd every {} s", out.interval),
+                format!(
+                    "VTK frames + {}.pvd every {} s",
+                    if scene.grid.is_some() {
+                        "grid"
+                    } else {
+                        "particles"
+                    },
+                    out.interval
+                ),
             );
         }
         if out.hdf5 {
@@ -121,7 +141,7 @@ impl Plan {
     }
 }
 
-fn is_moving(b: &super::schema::Body) -> bool {
+pub(super) fn is_moving(b: &super::schema::Body) -> bool {
     let m = &b.motion;
     !m.keyframes.is_empty() || m.linear.iter().chain(&m.angular).any(|&c| c != 0.0)
 }

@@ -322,15 +322,35 @@ pub enum Probe {
         #[serde(default)]
         origin: Real,
     },
-    /// Pressure and velocity at a point, kernel-interpolated (Shepard-normalised).
+    /// Pressure and velocity at a point: kernel-interpolated (Shepard-normalised) on SPH,
+    /// trilinear on the grid.
     Point { name: String, position: [Real; 3] },
+    /// Grid only: the velocity at `points` evenly spaced samples from `from` to `to`, written
+    /// as `profile_NAME.csv` at the end of the run.
+    Line {
+        name: String,
+        from: [Real; 3],
+        to: [Real; 3],
+        #[serde(default = "default_line_points")]
+        points: usize,
+    },
+    /// Grid only: the force of the fluid on an obstacle (named by its `name`), pressure and
+    /// viscous parts, N.
+    Force { name: String, body: String },
+}
+
+fn default_line_points() -> usize {
+    65
 }
 
 impl Probe {
     /// The probe's name.
     pub fn name(&self) -> &str {
         match self {
-            Probe::Front { name, .. } | Probe::Point { name, .. } => name,
+            Probe::Front { name, .. }
+            | Probe::Point { name, .. }
+            | Probe::Line { name, .. }
+            | Probe::Force { name, .. } => name,
         }
     }
 }

@@ -178,21 +178,67 @@ impl Scene {
                 ));
             }
             names.push(name);
+            let grid_only = matches!(probe, Probe::Line { .. } | Probe::Force { .. });
+            if grid_only && self.grid.is_none() {
+                return Err(c.invalid(
+                    format!("{key}.type"),
+                    format!("{name:?}"),
+                    "front or point probes in a scene without [grid]",
+                ));
+            }
+            if matches!(probe, Probe::Front { .. }) && self.fluid.is_none() {
+                return Err(c.invalid(
+                    format!("{key}.type"),
+                    "\"front\"",
+                    "point, line or force probes in a scene without [fluid]",
+                ));
+            }
             match probe {
                 Probe::Front { origin, .. } => {
                     c.num(&format!("{key}.origin"), *origin, Interval::any())?;
                 }
-                Probe::Point { position, .. } => {
-                    for (axis, &x) in position.iter().enumerate() {
-                        c.num(
-                            &format!("{key}.position[{axis}]"),
-                            x,
-                            Interval::closed(self.domain.min[axis], self.domain.max[axis])
-                                .note("inside the domain"),
-                        )?;
+                Probe::Line {
+                    from, to, points, ..
+                } => {
+                    for (end, point) in [("from", from), ("to", to)] {
+                        self.point_inside(c, &format!("{key}.{end}"), point)?;
+                    }
+                    if !(2..=100_000).contains(points) {
+                        return Err(c.invalid(format!("{key}.points"), points, "2 to 100000"));
                     }
                 }
+                Probe::Force { body, .. } => {
+                    if !self
+                        .obstacles
+                        .iter()
+                        .any(|b| b.name.as_deref() == Some(body))
+                    {
+                        return Err(c.invalid(
+                            format!("{key}.body"),
+                            format!("{body:?}"),
+                            "the `name` of one of the obstacles",
+                        ));
+                    }
+                }
+                Probe::Point { position, .. } => {
+                    self.point_inside(c, &format!("{key}.position"), position)?;
+                }
             }
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// Checks that a point lies in the domain.
+    fn point_inside(&self, c: &Checker, key: &str, p: &[Real; 3]) -> Result<(), SceneError> {
+        for (axis, &x) in p.iter().enumerate() {
+            c.num(
+                &format!("{key}[{axis}]"),
+                x,
+                Interval::closed(self.domain.min[axis], self.domain.max[axis])
+                    .note("inside the domain"),
+            )?;
         }
         Ok(())
     }

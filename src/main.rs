@@ -42,6 +42,8 @@ enum Command {
     },
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(eddy::bench::BenchArgs),
+    /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
+    BenchGrid(eddy::grid::bench::GridBenchArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -97,6 +99,7 @@ fn main() -> anyhow::Result<()> {
             );
         }
         Command::Bench(args) => eddy::bench::run(&args)?,
+        Command::BenchGrid(args) => eddy::grid::bench::run(&args)?,
     }
     Ok(())
 }

@@ -36,69 +36,45 @@ impl Stagger {
         s
     }
 
-    /// The two sample indices and the weight of the second along one axis, for a position `g`
-    /// in cell units from the grid origin.
+    /// The two sample indices and the weight of the second along axis `a`, for a position
+    /// `g` in cell units from the grid origin.
     #[inline]
-    fn axis(&self, a: usize, g: Real) -> (usize, usize, Real) {
-        let c = g - self.offset[a];
-        let base = c.floor();
-        let f = c - base;
-        let i0 = base as isize;
-        match self.period[a] {
-            Some(n) => {
-                let n = n as isize;
-                let lo = i0.rem_euclid(n);
-                ((lo) as usize, ((lo + 1) % n) as usize, f)
-            }
-            None => {
-                let last = self.shape[a] as isize - 1;
-                if i0 < 0 {
-                    (0, 0, 0.0)
-                } else if i0 >= last {
-                    (last as usize, last as usize, 0.0)
-                } else {
-                    (i0 as usize, i0 as usize + 1, f)
-                }
-            }
-        }
+    fn axis(&self, a: usize, g: Real) -> AxisWeights {
+        axis_weights(g - self.offset[a], self.shape[a], self.period[a])
+    }
+
+    /// The eight samples around position `g` (cell units from the grid origin), x fastest,
+    /// and the weights along x, y, z.
+    #[inline]
+    fn corners(&self, field: &Array3<Real>, g: [Real; 3]) -> ([Real; 8], [Real; 3]) {
+        let data = field
+            .as_slice()
+            .expect("grid fields are in standard layout");
+        corners(
+            data,
+            self.shape,
+            [self.axis(0, g[0]), self.axis(1, g[1]), self.axis(2, g[2])],
+        )
     }
 
     /// The field at position `g` (cell units from the grid origin), with the smallest and
     /// largest of the samples it was interpolated from.
     #[inline]
     pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
-        let (i0, i1, fx) = self.axis(0, g[0]);
-        let (j0, j1, fy) = self.axis(1, g[1]);
-        let (k0, k1, fz) = self.axis(2, g[2]);
-        let at = |i, j, k| field[[i, j, k]];
-        let c = [
-            at(i0, j0, k0),
-            at(i1, j0, k0),
-            at(i0, j1, k0),
-            at(i1, j1, k0),
-            at(i0, j0, k1),
-            at(i1, j0, k1),
-            at(i0, j1, k1),
-            at(i1, j1, k1),
-        ];
-        let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
-        let x00 = lerp(c[0], c[1], fx);
-        let x10 = lerp(c[2], c[3], fx);
-        let x01 = lerp(c[4], c[5], fx);
-        let x11 = lerp(c[6], c[7], fx);
-        let value = lerp(lerp(x00, x10, fy), lerp(x01, x11, fy), fz);
+        let (c, f) = self.corners(field, g);
         let (lo, hi) = c
             .iter()
             .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-        (value, lo, hi)
+        (trilinear(&c, f), lo, hi)
     }
 
     /// The field at position `g` (cell units from the grid origin).
     #[inline]
     pub fn sample(&self, field: &Array3<Real>, g: [Real; 3]) -> Real {
-        self.sample_with_range(field, g).0
+        let (c, f) = self.corners(field, g);
+        trilinear(&c, f)
     }
 
     /// Position of sample (i, j, k) in cell units from the grid origin.
@@ -106,4 +82,76 @@ impl Stagger {
     pub fn position(&self, idx: [usize; 3]) -> [Real; 3] {
         std::array::from_fn(|a| idx[a] as Real + self.offset[a])
     }
+}
+
+/// Trilinear interpolation of eight corner values (x fastest) at weights `f`.
+#[inline]
+pub(crate) fn trilinear(c: &[Real; 8], f: [Real; 3]) -> Real {
+    let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
+    let x00 = lerp(c[0], c[1], f[0]);
+    let x10 = lerp(c[2], c[3], f[0]);
+    let x01 = lerp(c[4], c[5], f[0]);
+    let x11 = lerp(c[6], c[7], f[0]);
+    lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+}
+
+/// Two neighbouring sample indices along one axis and the weight of the second.
+pub(crate) type AxisWeights = (usize, usize, Real);
+
+/// The samples around coordinate `c` (in samples) on an axis of `len` samples: wrapped with
+/// period `period`, or clamped to the end samples (zero weight beyond them).
+#[inline]
+pub(crate) fn axis_weights(c: Real, len: usize, period: Option<usize>) -> AxisWeights {
+    // floor by truncation: `f64::floor` is a libm call on baseline x86-64.
+    let t = c as isize;
+    let i0 = if (t as Real) > c { t - 1 } else { t };
+    let f = c - i0 as Real;
+    match period {
+        Some(n) => {
+            let n = n as isize;
+            let lo = if (0..n).contains(&i0) {
+                i0
+            } else {
+                i0.rem_euclid(n)
+            };
+            let hi = if lo + 1 == n { 0 } else { lo + 1 };
+            (lo as usize, hi as usize, f)
+        }
+        None => {
+            let last = len as isize - 1;
+            if i0 < 0 {
+                (0, 0, 0.0)
+            } else if i0 >= last {
+                (last as usize, last as usize, 0.0)
+            } else {
+                (i0 as usize, i0 as usize + 1, f)
+            }
+        }
+    }
+}
+
+/// The eight samples of a standard-layout array of `shape` at the given axis weights, x
+/// fastest, and the weights.
+#[inline]
+pub(crate) fn corners(
+    data: &[Real],
+    shape: [usize; 3],
+    [(i0, i1, fx), (j0, j1, fy), (k0, k1, fz)]: [AxisWeights; 3],
+) -> ([Real; 8], [Real; 3]) {
+    let sy = shape[2];
+    let sx = shape[1] * sy;
+    let (x0, x1, y0, y1) = (i0 * sx, i1 * sx, j0 * sy, j1 * sy);
+    (
+        [
+            data[x0 + y0 + k0],
+            data[x1 + y0 + k0],
+            data[x0 + y1 + k0],
+            data[x1 + y1 + k0],
+            data[x0 + y0 + k1],
+            data[x1 + y0 + k1],
+            data[x0 + y1 + k1],
+            data[x1 + y1 + k1],
+        ],
+        [fx, fy, fz],
+    )
 }

@@ -3,7 +3,7 @@
 
 use ndarray::{Array3, Axis, Zip};
 
-use super::interp::Stagger;
+use super::interp::{axis_weights, corners, trilinear, AxisWeights, Stagger};
 use crate::{Real, Vec3};
 
 /// Face velocities on a box of cubic cells.
@@ -71,8 +71,27 @@ impl MacGrid {
     }
 
     /// Velocity at a point given in cell units, by trilinear interpolation of each component.
+    /// The axis weights are shared: along each axis a component sits either on faces (its own
+    /// axis, offset 0) or at cell centres (offset 1/2).
+    #[inline]
     pub fn velocity_at_grid(&self, g: [Real; 3]) -> Vec3 {
-        Vec3::from_fn(|a, _| self.face_stagger(a).sample(&self.u[a], g))
+        let weights: [[AxisWeights; 2]; 3] = std::array::from_fn(|b| {
+            let period = self.periodic[b].then_some(self.dims[b]);
+            [
+                axis_weights(g[b], self.dims[b] + 1, period),
+                axis_weights(g[b] - 0.5, self.dims[b], period),
+            ]
+        });
+        Vec3::from_fn(|a, _| {
+            let data = self.u[a]
+                .as_slice()
+                .expect("face arrays are in standard layout");
+            let mut shape = self.dims;
+            shape[a] += 1;
+            let pick = |b: usize| weights[b][usize::from(b != a)];
+            let (c, f) = corners(data, shape, [pick(0), pick(1), pick(2)]);
+            trilinear(&c, f)
+        })
     }
 
     /// Velocity at a world position, m/s.

@@ -5,6 +5,7 @@
 
 pub mod advect;
 pub mod average;
+pub mod bench;
 pub mod boundary;
 mod components;
 pub mod diffusion;

@@ -1,0 +1,128 @@
+//! `eddy bench-grid`: the MAC-grid benchmarks of the README. Step time of the smoke plume
+//! (advection, projection, total, pressure iterations) at several resolutions, the set-up of
+//! mantaflow's simple plume so the two can be compared; and the Taylor–Green energy error
+//! against run time for both advection schemes, with and without advection–reflection, at
+//! three resolutions (the run-time-against-error table).
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::scene::{self, Scene};
+use crate::Real;
+
+use super::solver::{GridError, GridSolver};
+
+/// Options of `eddy bench-grid`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct GridBenchArgs {
+    /// Smoke plume resolutions (cells per side).
+    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "64,128")]
+    pub plume: Vec<usize>,
+    /// Steps run before timing starts (the plume has to start moving).
+    #[arg(long, default_value_t = 10)]
+    pub warmup: u64,
+    /// Timed steps.
+    #[arg(long, default_value_t = 10)]
+    pub steps: u64,
+    /// Taylor–Green resolutions (cells per side); the flag alone skips the table.
+    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "32,64,128")]
+    pub taylor_green: Vec<usize>,
+}
+
+/// The shipped smoke plume at `n`^3 cells.
+fn plume_scene(n: usize) -> Scene {
+    scene::parse_str(
+        include_str!("../../scenes/smoke_plume.toml"),
+        Path::new("scenes/smoke_plume.toml"),
+        &[format!("grid.resolution=[{n},{n},{n}]")],
+    )
+    .expect("the shipped plume scene is valid")
+}
+
+/// Mean seconds per step of (advection, projection, total) and mean pressure iterations.
+pub fn time_plume(n: usize, warmup: u64, steps: u64) -> Result<[f64; 4], GridError> {
+    let mut solver = GridSolver::new(&plume_scene(n), Vec::new())?;
+    for _ in 0..warmup {
+        solver.advance(None)?;
+    }
+    let mut sums = [0.0; 4];
+    for _ in 0..steps {
+        let s = solver.advance(None)?;
+        for (sum, v) in sums.iter_mut().zip([
+            s.advect_seconds,
+            s.project_seconds,
+            s.total_seconds,
+            s.pressure_iterations as f64,
+        ]) {
+            *sum += v;
+        }
+    }
+    Ok(sums.map(|s| s / steps as f64))
+}
+
+/// Largest |ln(E / E_exact)| of the 2-D Taylor–Green vortex (nu = 0.1, CFL 0.5, to t = 2.5 s,
+/// Crank–Nicolson viscosity) and the wall time it took.
+pub fn taylor_green(n: usize, advection: &str, reflection: bool) -> Result<(Real, f64), GridError> {
+    let l = 2.0 * std::f64::consts::PI;
+    let dz = l / n as Real;
+    let text = format!(
+        r#"
+        name = "taylor_green"
+        gravity = [0.0, 0.0, 0.0]
+        domain = {{ min = [0.0, 0.0, 0.0], max = [{l}, {l}, {dz}] }}
+        time = {{ end = 2.5, cfl = 0.5, dt_max = 1.0 }}
+        viscosity = {{ kinematic = 0.1 }}
+        [grid]
+        resolution = [{n}, {n}, 1]
+        advection = "{advection}"
+        reflection = {reflection}
+        viscosity_scheme = "crank_nicolson"
+        pressure_tolerance = 1e-10
+        boundary = {{ x_min = "periodic", x_max = "periodic", y_min = "periodic", y_max = "periodic", z_min = "periodic", z_max = "periodic" }}
+        "#
+    );
+    let scene = scene::parse_str(&text, Path::new("taylor_green"), &[])
+        .expect("the built-in Taylor-Green scene is valid");
+    let started = Instant::now();
+    let mut g = GridSolver::new(&scene, Vec::new())?;
+    g.set_velocity(|x| crate::Vec3::new(x.x.sin() * x.y.cos(), -x.x.cos() * x.y.sin(), 0.0))?;
+    let e0 = g.kinetic_energy();
+    let mut worst: Real = 0.0;
+    while g.time() < 2.5 - 1e-12 {
+        g.advance(Some(2.5 - g.time()))?;
+        let exact = e0 * (-0.4 * g.time()).exp();
+        worst = worst.max((g.kinetic_energy() / exact).ln().abs());
+    }
+    Ok((worst, started.elapsed().as_secs_f64()))
+}
+
+/// Runs the benchmarks and prints their tables.
+pub fn run(args: &GridBenchArgs) -> Result<(), GridError> {
+    let threads = rayon::current_num_threads();
+    if !args.plume.is_empty() {
+        println!(
+            "smoke plume (scenes/smoke_plume.toml), {threads} threads, {} warm-up + {} timed steps",
+            args.warmup, args.steps
+        );
+        println!("| cells | advect s | project s | step s | CG iterations |");
+        println!("|---|---|---|---|---|");
+        for &n in &args.plume {
+            let [a, p, t, it] = time_plume(n, args.warmup, args.steps)?;
+            println!("| {n}^3 | {a:.3} | {p:.3} | {t:.3} | {it:.1} |");
+        }
+    }
+    if !args.taylor_green.is_empty() {
+        println!("\nTaylor-Green energy error |ln(E/E_exact)| at t = 2.5 s (nu = 0.1, CFL 0.5)");
+        println!("| advection | reflection | cells | error | run time s |");
+        println!("|---|---|---|---|---|");
+        for adv in ["semi_lagrangian", "maccormack"] {
+            for reflection in [false, true] {
+                for &n in &args.taylor_green {
+                    let (e, s) = taylor_green(n, adv, reflection)?;
+                    println!("| {adv} | {reflection} | {n}^2 | {e:.2e} | {s:.2} |");
+                }
+            }
+        }
+    }
+    Ok(())
+}

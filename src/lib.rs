@@ -9,6 +9,7 @@ pub mod bench;
 pub mod geometry;
 pub mod io;
 pub mod metrics;
+pub mod refine;
 pub mod run;
 pub mod scene;
 pub mod sph;

@@ -4,10 +4,12 @@ pub mod error;
 pub mod load;
 pub mod overrides;
 pub mod plan;
+pub mod refinement;
 pub mod schema;
 pub mod validate;
 
 pub use error::SceneError;
 pub use load::{load, parse_str};
 pub use overrides::apply_override;
+pub use refinement::Refinement;
 pub use schema::*;

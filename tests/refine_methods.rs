@@ -4,7 +4,7 @@
 
 use eddy::refine::{self, StepContext};
 use eddy::run::bodies;
-use eddy::scene::{self, Refinement, Scene, SceneError};
+use eddy::scene::{self, Refinement, Scene};
 use eddy::sph::operators::{volumes, Operators, WallField};
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
@@ -98,7 +98,90 @@ fn a_vortex_that_lost_vorticity_gets_it_back() {
         assert!(!axis.is_empty());
         for &i in &axis {
             let ratio = back[i].z / lost[i].z;
-            assert!(ratio > 0.0 && ratio <= 1.0, "{method}: restored {ratio} of the loss");
+            assert!(
+                ratio > 0.0 && ratio <= 1.0,
+                "{method}: restored {ratio} of the loss"
+            );
         }
+    }
+}
+
+fn load_error(refinement: &str) -> String {
+    match scene::parse_str(&scene_text(refinement), Path::new("bad.toml"), &[]) {
+        Ok(s) => panic!("accepted {:?}", s.refinement),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Out-of-range, misplaced, unknown and malformed refinement parameters give errors that name
+/// the file, the key, the value and what is allowed.
+#[test]
+fn bad_refinement_parameters_give_clear_errors() {
+    let cases: [(&str, &[&str]); 8] = [
+        (
+            "method = \"rankine\"\nbeta = 1.5",
+            &["bad.toml", "refinement.beta", "1.5", "[0, 1]", "rankine"],
+        ),
+        (
+            "method = \"vrsph\"\nalpha = -0.1",
+            &["bad.toml", "refinement.alpha", "-0.1", "[0, 2]"],
+        ),
+        (
+            "method = \"mcvsph\"\nsample_fraction = 0.0",
+            &["refinement.sample_fraction", "(0, 1]"],
+        ),
+        (
+            "method = \"mcvsph\"\nvolume_coefficient = 1.0",
+            &["refinement.volume_coefficient", "[0, 1)"],
+        ),
+        (
+            "method = \"micropolar\"\nmicro_inertia = 0.0",
+            &["refinement.micro_inertia", "> 0"],
+        ),
+        (
+            "method = \"confinement\"\nepsilon = nan",
+            &["refinement.epsilon", "NaN", ">= 0"],
+        ),
+        (
+            "method = \"rankine\"\nalpha = 1.0",
+            &[
+                "bad.toml",
+                "refinement",
+                "unknown key `alpha`",
+                "`beta` or `walls`",
+            ],
+        ),
+        ("method = \"vortex\"", &["bad.toml", "refinement", "vortex"]),
+    ];
+    for (text, needles) in cases {
+        let e = load_error(text);
+        for n in needles {
+            assert!(e.contains(n), "{text:?}: {e:?} lacks {n:?}");
+        }
+    }
+    let e = load_error("method = \"vrsph\"\nalpha = \"high\"");
+    assert!(e.contains("refinement") && e.contains("line"), "{e}");
+    // Defaults are the papers' values, and validation accepts them.
+    let file = Path::new("ok.toml");
+    for (text, expected) in [
+        (
+            "method = \"rankine\"",
+            Refinement::Rankine {
+                beta: 1.0,
+                walls: false,
+            },
+        ),
+        (
+            "method = \"mcvsph\"",
+            Refinement::Mcvsph {
+                sample_fraction: 0.01,
+                volume_coefficient: 0.05,
+                walls: false,
+            },
+        ),
+    ] {
+        let s = scene::parse_str(&scene_text(text), file, &[]).expect("valid");
+        assert_eq!(s.refinement, expected);
+        s.refinement.validate(file).expect("defaults are valid");
     }
 }

@@ -84,7 +84,11 @@ fn solid_body_rotation_has_curl_twice_the_angular_velocity() {
         let kappa = moment.trace() / 3.0;
         assert!((moment - kappa * nalgebra::Matrix3::identity()).norm() < 1e-9 * kappa);
         assert!((kappa - 1.0).abs() < 0.03, "kernel moment {kappa}");
-        assert!((curl[i] - 2.0 * kappa * w).norm() < 1e-9 * w.norm(), "curl {:?}", curl[i]);
+        assert!(
+            (curl[i] - 2.0 * kappa * w).norm() < 1e-9 * w.norm(),
+            "curl {:?}",
+            curl[i]
+        );
         assert!((grad[i] - kappa * rotation).norm() < 1e-9 * rotation.norm());
     }
     for i in 0..s.fluid.len() {
@@ -167,7 +171,10 @@ fn a_single_vortex_turns_in_the_sense_of_its_vorticity() {
         if j == c || off_axis < 0.5 * SPACING || d.norm() > 1.5 * SPACING {
             continue;
         }
-        assert!(turning(&s.fluid.x[j], &xc, &rankine[j]) > 0.0, "Rankine at {d:?}");
+        assert!(
+            turning(&s.fluid.x[j], &xc, &rankine[j]) > 0.0,
+            "Rankine at {d:?}"
+        );
         assert!(turning(&s.fluid.x[j], &xc, &vr[j]) > 0.0, "VRSPH at {d:?}");
         checked += 1;
     }
@@ -233,8 +240,8 @@ fn monte_carlo_biot_savart_is_unbiased_with_inverse_sqrt_error() {
         let finite = 1.0 - (n - 1) as Real / (population - 1) as Real;
         scaled_rms.push(rms * (n as Real / finite).sqrt() / norm);
     }
-    let (lo, hi) = scaled_rms
-        .iter()
-        .fold((Real::MAX, 0.0), |(lo, hi), &r| (lo.min(r), Real::max(hi, r)));
+    let (lo, hi) = scaled_rms.iter().fold((Real::MAX, 0.0), |(lo, hi), &r| {
+        (lo.min(r), Real::max(hi, r))
+    });
     assert!(hi / lo < 1.2, "rms * sqrt(N) not constant: {scaled_rms:?}");
 }

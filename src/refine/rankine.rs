@@ -68,7 +68,13 @@ impl Refiner for Rankine {
             return;
         }
         let mut omega = ctx.ops.curl(v, WallField::Velocity);
-        let rc = core_radius(self.beta, ctx.nu, ctx.dt, ctx.spacing, ctx.ops.nb.kernel.support());
+        let rc = core_radius(
+            self.beta,
+            ctx.nu,
+            ctx.dt,
+            ctx.spacing,
+            ctx.ops.nb.kernel.support(),
+        );
         if let Some(previous) = self.previous.as_ref().filter(|p| p.len() == v.len()) {
             if rc > 0.0 {
                 let lost: Vec<Vec3> = previous

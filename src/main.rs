@@ -42,6 +42,15 @@ enum Command {
     },
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(eddy::bench::BenchArgs),
+    /// Plot energy and vorticity against time for several runs into one PNG.
+    Compare {
+        /// Run output folders (each with a metrics.csv).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
@@ -93,6 +102,14 @@ fn main() -> anyhow::Result<()> {
             );
         }
         Command::Bench(args) => eddy::bench::run(&args)?,
+        Command::Compare { runs, out } => {
+            let series = runs
+                .iter()
+                .map(|d| eddy::io::plot::RunSeries::read(d))
+                .collect::<Result<Vec<_>, _>>()?;
+            eddy::io::plot::compare(&series, &out)?;
+            eprintln!("eddy: wrote {}", out.display());
+        }
     }
     Ok(())
 }

@@ -10,6 +10,7 @@ mod csv;
 mod error;
 mod frame;
 mod hdf5_frames;
+pub mod plot;
 mod pvd;
 mod vtk;
 

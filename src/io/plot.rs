@@ -127,7 +127,7 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
                 points().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
             let (y0, y1) =
                 points().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
-            if curves.is_empty() || !(t1 > t0) {
+            if curves.is_empty() || t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) {
                 area.titled(&format!("{title}: no data"), ("sans-serif", 20))
                     .map_err(|e| fail(&e))?;
                 continue;

@@ -59,11 +59,6 @@ impl Mcvsph {
             ideal: Vec::new(),
         }
     }
-
-    /// Number of vortex particles.
-    pub fn sample_count(&self) -> usize {
-        self.sampled.iter().filter(|s| **s).count()
-    }
 }
 
 /// `count` distinct indices below `n`, uniformly at random from the seed.

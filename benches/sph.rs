@@ -7,5 +7,7 @@ fn main() -> Result<(), eddy::run::RunError> {
         solvers: vec!["dfsph".into(), "iisph".into()],
         warmup: 5,
         steps: 10,
+        refinements: Vec::new(),
+        mcvsph_error: false,
     })
 }

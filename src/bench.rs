@@ -27,6 +27,14 @@ pub struct BenchArgs {
     /// Timed steps.
     #[arg(long, default_value_t = 30)]
     pub steps: u64,
+    /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
+    /// micropolar,confinement), at their paper defaults; see `crate::refine::bench`.
+    #[arg(long, value_delimiter = ',')]
+    pub refinements: Vec<String>,
+    /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
+    /// particles at the smallest size.
+    #[arg(long)]
+    pub mcvsph_error: bool,
 }
 
 /// One measured configuration.
@@ -39,11 +47,18 @@ pub struct BenchResult {
     pub neighbor_ms: f64,
     pub pressure_iterations: f64,
     pub bytes_per_particle: f64,
+    /// Milliseconds per step in the turbulence refinement.
+    pub refinement_ms: f64,
 }
 
 /// The benchmark scene with a cube of `n`^3 fluid particles; at n = 46 it is the reference
 /// set-up exactly (radius 0.0106 m), other sizes scale the spacing so the cube stays ~1 m.
 pub fn dam_break_scene(n: usize, solver: PressureSolverKind) -> Scene {
+    dam_break_scene_with(n, solver, &[])
+}
+
+/// [`dam_break_scene`] with further `--set` style overrides.
+pub fn dam_break_scene_with(n: usize, solver: PressureSolverKind, extra: &[String]) -> Scene {
     let text = include_str!("../scenes/bench_dam_break.toml");
     let spacing = 0.0212 * 46.0 / n as Real;
     let side = n as Real * spacing * (1.0 + 1e-9);
@@ -51,16 +66,14 @@ pub fn dam_break_scene(n: usize, solver: PressureSolverKind) -> Scene {
         PressureSolverKind::Dfsph => "dfsph",
         PressureSolverKind::Iisph => "iisph",
     };
-    scene::parse_str(
-        text,
-        Path::new("scenes/bench_dam_break.toml"),
-        &[
-            format!("fluid.spacing={spacing}"),
-            format!("fluid.blocks.0.max=[{side}, {side}, {side}]"),
-            format!("pressure.solver=\"{solver}\""),
-        ],
-    )
-    .expect("the built-in benchmark scene is valid")
+    let mut overrides = vec![
+        format!("fluid.spacing={spacing}"),
+        format!("fluid.blocks.0.max=[{side}, {side}, {side}]"),
+        format!("pressure.solver=\"{solver}\""),
+    ];
+    overrides.extend_from_slice(extra);
+    scene::parse_str(text, Path::new("scenes/bench_dam_break.toml"), &overrides)
+        .expect("the built-in benchmark scene is valid")
 }
 
 /// Times `steps` steps after `warmup` steps of one configuration.
@@ -70,7 +83,18 @@ pub fn measure(
     warmup: u64,
     steps: u64,
 ) -> Result<BenchResult, RunError> {
-    let scene = dam_break_scene(n, solver);
+    measure_with(n, solver, &[], warmup, steps)
+}
+
+/// [`measure`] on the scene with further overrides (`extra`).
+pub fn measure_with(
+    n: usize,
+    solver: PressureSolverKind,
+    extra: &[String],
+    warmup: u64,
+    steps: u64,
+) -> Result<BenchResult, RunError> {
+    let scene = dam_break_scene_with(n, solver, extra);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
     let unstable = |cause| RunError::Unstable {
         cause,
@@ -81,13 +105,14 @@ pub fn measure(
         sph.advance().map_err(unstable)?;
         sph.update_neighborhoods();
     }
-    let (mut total, mut search, mut iterations) = (0.0, 0.0, 0.0);
+    let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
     for _ in 0..steps {
         let t0 = Instant::now();
         let stats = sph.advance().map_err(unstable)?;
         sph.update_neighborhoods();
         total += t0.elapsed().as_secs_f64();
         iterations += stats.pressure.iterations as f64;
+        refine += stats.refinement_seconds;
         search += time_neighbor_search(&sph);
     }
     Ok(BenchResult {
@@ -98,6 +123,7 @@ pub fn measure(
         neighbor_ms: 1e3 * search / steps as f64,
         pressure_iterations: iterations / steps as f64,
         bytes_per_particle: sph.memory_bytes() as f64 / sph.fluid.len() as f64,
+        refinement_ms: 1e3 * refine / steps as f64,
     })
 }
 
@@ -169,6 +195,7 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
             );
         }
     }
+    crate::refine::bench::run(args)?;
     if let Some(rss) = peak_rss() {
         println!("peak resident memory: {:.1} MiB", rss as f64 / 1048576.0);
     }

@@ -10,6 +10,7 @@ pub mod geometry;
 pub mod grid;
 pub mod io;
 pub mod metrics;
+pub mod refine;
 pub mod run;
 pub mod scene;
 pub mod sph;

@@ -44,6 +44,15 @@ enum Command {
     Bench(eddy::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
     BenchGrid(eddy::grid::bench::GridBenchArgs),
+    /// Plot energy and vorticity against time for several runs into one PNG.
+    Compare {
+        /// Run output folders (each with a metrics.csv).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
@@ -100,6 +109,14 @@ fn main() -> anyhow::Result<()> {
         }
         Command::Bench(args) => eddy::bench::run(&args)?,
         Command::BenchGrid(args) => eddy::grid::bench::run(&args)?,
+        Command::Compare { runs, out } => {
+            let series = runs
+                .iter()
+                .map(|d| eddy::io::plot::RunSeries::read(d))
+                .collect::<Result<Vec<_>, _>>()?;
+            eddy::io::plot::compare(&series, &out)?;
+            eprintln!("eddy: wrote {}", out.display());
+        }
     }
     Ok(())
 }

@@ -226,7 +226,7 @@ impl FrameWriter {
             return Ok(());
         }
         let f = &solver.fluid;
-        let frame = ParticleFrame {
+        let mut frame = ParticleFrame {
             step: solver.steps(),
             time: solver.time(),
             positions: &f.x,
@@ -236,6 +236,10 @@ impl FrameWriter {
                 Field::scalar("pressure", &f.pressure),
             ],
         };
+        let extra = solver.refinement_fields();
+        frame
+            .fields
+            .extend(extra.iter().map(|(name, data)| Field::vector(name, data)));
         if let Some(pvd) = self.pvd.as_mut() {
             let name = format!("particles_{:06}.vtp", self.count);
             crate::io::write_particles_vtk(&self.out.join(&name), &frame)?;

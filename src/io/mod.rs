@@ -13,6 +13,7 @@ mod frame;
 mod grid_frame;
 mod hdf5_frames;
 mod hdf5_grid;
+pub mod plot;
 mod pvd;
 mod vti;
 mod vtk;

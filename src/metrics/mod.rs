@@ -34,6 +34,37 @@ pub fn density_errors(density: &[Real], rest_density: Real) -> (Real, Real) {
     (sum / density.len() as Real, max)
 }
 
+/// Vorticity statistics of a fluid: mean and largest |omega|, and the enstrophy
+/// sum_i V |omega_i|^2 / 2 with the rest volume V.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VorticityStats {
+    pub mean: Real,
+    pub max: Real,
+    pub enstrophy: Real,
+}
+
+/// [`VorticityStats`] of the vorticities `omega` of particles of rest volume `volume`.
+pub fn vorticity_stats(omega: &[Vec3], volume: Real) -> VorticityStats {
+    if omega.is_empty() {
+        return VorticityStats::default();
+    }
+    let (sum, max, sq) = omega
+        .par_iter()
+        .map(|w| {
+            let m = w.norm();
+            (m, m, m * m)
+        })
+        .reduce(
+            || (0.0, 0.0, 0.0),
+            |a, b| (a.0 + b.0, Real::max(a.1, b.1), a.2 + b.2),
+        );
+    VorticityStats {
+        mean: sum / omega.len() as Real,
+        max,
+        enstrophy: 0.5 * volume * sq,
+    }
+}
+
 /// Largest particle speed, m/s.
 pub fn max_speed(v: &[Vec3]) -> Real {
     v.par_iter().map(|v| v.norm()).reduce(|| 0.0, Real::max)

@@ -38,17 +38,34 @@ impl MetricsRecorder {
         let mut density_errors = || {
             *errors.get_or_insert_with(|| super::density_errors(&fluid.density, fluid.rest_density))
         };
+        let mut vorticity = None;
+        let mut vorticity = || {
+            *vorticity
+                .get_or_insert_with(|| super::vorticity_stats(&solver.vorticity(), fluid.volume()))
+        };
+        let total = || {
+            super::kinetic_energy(fluid.mass, &fluid.v)
+                + solver.rotational_energy()
+                + super::potential_energy(fluid.mass, &fluid.x, gravity)
+        };
         let values = self
             .metrics
             .iter()
             .map(|m| match m {
                 Metric::KineticEnergy => super::kinetic_energy(fluid.mass, &fluid.v),
                 Metric::PotentialEnergy => super::potential_energy(fluid.mass, &fluid.x, gravity),
+                Metric::RotationalEnergy => solver.rotational_energy(),
+                Metric::TotalEnergy => total(),
+                Metric::VorticityMean => vorticity().mean,
+                Metric::VorticityMax => vorticity().max,
+                Metric::Enstrophy => vorticity().enstrophy,
                 Metric::DensityErrorAvg => density_errors().0,
                 Metric::DensityErrorMax => density_errors().1,
                 Metric::MaxSpeed => super::max_speed(&fluid.v),
                 // Filled in from the step's statistics in `write`.
-                Metric::PressureIterations | Metric::DivergenceIterations => 0.0,
+                Metric::PressureIterations
+                | Metric::DivergenceIterations
+                | Metric::RefinementSeconds => 0.0,
             })
             .collect();
         StateMetrics { values }
@@ -68,6 +85,7 @@ impl MetricsRecorder {
             self.row.push(match m {
                 Metric::PressureIterations => stats.pressure.iterations as Real,
                 Metric::DivergenceIterations => stats.divergence.iterations as Real,
+                Metric::RefinementSeconds => stats.refinement_seconds,
                 _ => *v,
             });
         }

@@ -92,6 +92,9 @@ impl Plan {
                     p.max_iterations
                 ),
             );
+            if let Some(line) = scene.refinement.plan_line() {
+                push("refine", line);
+            }
             push("advect", "positions, then NaN and domain checks".into());
         }
         if let Some(grid) = &scene.grid {

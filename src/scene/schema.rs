@@ -43,6 +43,9 @@ pub struct Scene {
     /// Viscosity.
     #[serde(default)]
     pub viscosity: Viscosity,
+    /// The SPH turbulence refinement (`none` when left out).
+    #[serde(default)]
+    pub refinement: super::refinement::Refinement,
     /// Probes, each written as columns of `probes.csv`.
     #[serde(default)]
     pub probes: Vec<Probe>,
@@ -366,11 +369,23 @@ pub enum Metric {
     MaxSpeed,
     PressureIterations,
     DivergenceIterations,
+    /// Rotational energy of a micropolar refinement, J (zero for other methods).
+    RotationalEnergy,
+    /// Kinetic (linear plus rotational) plus potential energy, J.
+    TotalEnergy,
+    /// Mean |curl v| over the fluid particles, 1/s.
+    VorticityMean,
+    /// Largest |curl v|, 1/s.
+    VorticityMax,
+    /// Enstrophy sum_i V |curl v_i|^2 / 2, m^3/s^2.
+    Enstrophy,
+    /// Wall-clock time of the refinement in the step, s.
+    RefinementSeconds,
 }
 
 impl Metric {
     /// Every metric, in column order.
-    pub const ALL: [Metric; 7] = [
+    pub const ALL: [Metric; 13] = [
         Metric::KineticEnergy,
         Metric::PotentialEnergy,
         Metric::DensityErrorAvg,
@@ -378,6 +393,12 @@ impl Metric {
         Metric::MaxSpeed,
         Metric::PressureIterations,
         Metric::DivergenceIterations,
+        Metric::RotationalEnergy,
+        Metric::TotalEnergy,
+        Metric::VorticityMean,
+        Metric::VorticityMax,
+        Metric::Enstrophy,
+        Metric::RefinementSeconds,
     ];
     /// Column name in `metrics.csv`.
     pub fn column(self) -> &'static str {
@@ -389,6 +410,12 @@ impl Metric {
             Metric::MaxSpeed => "max_speed",
             Metric::PressureIterations => "pressure_iterations",
             Metric::DivergenceIterations => "divergence_iterations",
+            Metric::RotationalEnergy => "rotational_energy",
+            Metric::TotalEnergy => "total_energy",
+            Metric::VorticityMean => "vorticity_mean",
+            Metric::VorticityMax => "vorticity_max",
+            Metric::Enstrophy => "enstrophy",
+            Metric::RefinementSeconds => "refinement_seconds",
         }
     }
 }

@@ -67,6 +67,7 @@ impl Scene {
         }
         self.validate_solvers(&c)?;
         self.validate_grid(&c)?;
+        self.refinement.validate(file)?;
         self.validate_probes(&c)?;
         c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
         let mut metrics = HashSet::new();

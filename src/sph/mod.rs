@@ -9,6 +9,7 @@ pub mod iisph;
 pub mod kernel;
 pub mod neighborhood;
 pub mod neighbors;
+pub mod operators;
 pub mod solver;
 
 pub use kernel::CubicSpline;

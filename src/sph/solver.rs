@@ -14,10 +14,13 @@ use super::iisph;
 use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order, CellGrid, NeighborLists};
+use super::operators::{self, Operators, WallField};
 use crate::geometry::RigidBody;
+use crate::refine::{self, Refiner, StepContext};
 use crate::scene::{Pressure, PressureSolverKind, Scene, Viscosity};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -67,6 +70,8 @@ pub struct StepStats {
     pub dt: Real,
     pub divergence: SolveResult,
     pub pressure: SolveResult,
+    /// Wall-clock seconds spent in the turbulence refinement.
+    pub refinement_seconds: Real,
 }
 
 /// The SPH fluid, its boundary samples, and the settings that drive it.
@@ -90,6 +95,10 @@ pub struct SphSolver {
     factor: Vec<Real>,
     time: Real,
     step: u64,
+    /// The turbulence refinement, if the scene has one.
+    refiner: Option<Box<dyn Refiner>>,
+    /// Boundary samples take part in the difference operators (`refinement.walls`).
+    walls_in_operators: bool,
 }
 
 impl SphSolver {
@@ -147,6 +156,8 @@ impl SphSolver {
             factor: vec![0.0; n],
             time: 0.0,
             step: 0,
+            refiner: refine::build(&scene.refinement, n, scene.seed),
+            walls_in_operators: scene.refinement.walls(),
         };
         me.update_neighborhoods();
         me
@@ -186,6 +197,9 @@ impl SphSolver {
         let h = self.kernel.support();
         let perm = cell_order(&self.fluid.x, h);
         self.fluid.permute(&perm);
+        if let Some(r) = self.refiner.as_mut() {
+            r.permute(&perm);
+        }
         self.grid = CellGrid::build(&self.fluid.x, h);
         self.fluid_lists = NeighborLists::build(
             &self.fluid.x,
@@ -243,7 +257,7 @@ impl SphSolver {
             min_iterations: settings.min_iterations,
             max_iterations: settings.max_iterations,
         };
-        let accel =
+        let mut accel =
             non_pressure_accelerations(&nb, density, rho0, v, self.gravity, &self.viscosity);
         let dt =
             step_size(&self.stepping, self.spacing, v, &accel).map_err(|(needed, speed)| {
@@ -267,6 +281,20 @@ impl SphSolver {
                 dt,
                 bounds(settings.divergence_tolerance),
             );
+        }
+        let walls = self.walls_in_operators;
+        let refine_ctx = |volume| StepContext {
+            ops: Operators { nb, volume, walls },
+            dt,
+            nu: self.viscosity.kinematic,
+            spacing: self.spacing,
+        };
+        let mut volume = Vec::new();
+        if let Some(r) = self.refiner.as_mut() {
+            let start = Instant::now();
+            volume = operators::volumes(*mass, density);
+            r.before_advection(&refine_ctx(&volume), v, &mut accel);
+            stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
         v.par_iter_mut()
             .zip(accel.par_iter())
@@ -297,6 +325,11 @@ impl SphSolver {
                 pressure_bounds,
             )
         };
+        if let Some(r) = self.refiner.as_mut() {
+            let start = Instant::now();
+            r.after_pressure(&refine_ctx(&volume), v);
+            stats.refinement_seconds += start.elapsed().as_secs_f64();
+        }
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
         pressure
             .par_iter_mut()
@@ -309,6 +342,30 @@ impl SphSolver {
         self.step += 1;
         self.check()?;
         Ok(stats)
+    }
+
+    /// The vorticity curl v of the current state, by the shared difference curl (with the
+    /// walls when the refinement lets them into its operators).
+    pub fn vorticity(&self) -> Vec<Vec3> {
+        let volume = operators::volumes(self.fluid.mass, &self.fluid.density);
+        Operators {
+            nb: self.neighborhood(),
+            volume: &volume,
+            walls: self.walls_in_operators,
+        }
+        .curl(&self.fluid.v, WallField::Velocity)
+    }
+
+    /// Rotational kinetic energy held by the refinement (micropolar), J; zero otherwise.
+    pub fn rotational_energy(&self) -> Real {
+        self.refiner
+            .as_ref()
+            .map_or(0.0, |r| r.rotational_energy(self.fluid.mass))
+    }
+
+    /// Per-particle fields the refinement adds to output frames.
+    pub fn refinement_fields(&self) -> Vec<(&'static str, &[Vec3])> {
+        self.refiner.as_ref().map_or_else(Vec::new, |r| r.fields())
     }
 
     /// Stops the run on a non-finite state or a particle outside the domain.

@@ -1,0 +1,170 @@
+//! PNG plots for `eddy compare`: energy and vorticity against time for several runs in one
+//! figure, the comparison every refinement paper shows (Liu et al. Fig. 7, Wang et al. Fig. 11,
+//! Ye et al. Fig. 10).
+//!
+//! Text is drawn with a bundled font (DejaVu Sans Mono, `assets/fonts`, free licence beside
+//! it) through ab_glyph, so plotting needs no system fonts or fontconfig.
+
+use super::IoError;
+use crate::Real;
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+/// The columns of one run's `metrics.csv`.
+#[derive(Debug, Clone)]
+pub struct RunSeries {
+    /// Legend label (the run folder's name).
+    pub label: String,
+    header: Vec<String>,
+    rows: Vec<Vec<Real>>,
+}
+
+impl RunSeries {
+    /// Reads `DIR/metrics.csv`.
+    pub fn read(dir: &Path) -> Result<Self, IoError> {
+        let path = dir.join("metrics.csv");
+        let text = std::fs::read_to_string(&path).map_err(|e| IoError::io(&path, "reading", e))?;
+        let mut lines = text.lines();
+        let header: Vec<String> = lines
+            .next()
+            .ok_or_else(|| IoError::invalid(&path, "empty file, no header"))?
+            .split(',')
+            .map(|c| c.trim().trim_matches('"').to_owned())
+            .collect();
+        let rows = lines
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty())
+            .map(|(n, line)| {
+                line.split(',')
+                    .map(|c| c.trim().parse::<Real>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| IoError::invalid(&path, format!("line {}: {e}", n + 2)))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let label = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| dir.display().to_string());
+        Ok(Self {
+            label,
+            header,
+            rows,
+        })
+    }
+
+    /// The column of that name, if the run wrote it.
+    pub fn column(&self, name: &str) -> Option<Vec<Real>> {
+        let k = self.header.iter().position(|h| h == name)?;
+        Some(self.rows.iter().filter_map(|r| r.get(k).copied()).collect())
+    }
+
+    /// A quantity against time: the sum of the named columns (those present), None when the
+    /// run has no time column or none of them.
+    fn curve(&self, columns: &[&str]) -> Option<Vec<(Real, Real)>> {
+        let time = self.column("time")?;
+        let parts: Vec<Vec<Real>> = columns.iter().filter_map(|c| self.column(c)).collect();
+        if parts.is_empty() {
+            return None;
+        }
+        Some(
+            time.iter()
+                .enumerate()
+                .map(|(i, &t)| (t, parts.iter().map(|p| p[i]).sum()))
+                .collect(),
+        )
+    }
+}
+
+/// The panels of the comparison: title and the metrics.csv columns summed into it.
+const PANELS: [(&str, &[&str]); 3] = [
+    (
+        "kinetic energy, linear + rotational (J)",
+        &["kinetic_energy", "rotational_energy"],
+    ),
+    ("total energy (J)", &["total_energy"]),
+    ("mean vorticity magnitude (1/s)", &["vorticity_mean"]),
+];
+
+fn register_bundled_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The font is compiled in; a failure here would be a corrupt asset, caught by the tests.
+        let _ = register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            include_bytes!("../../assets/fonts/DejaVuSansMono.ttf"),
+        );
+    });
+}
+
+/// Draws energy and vorticity against time for `runs` into the PNG `out` (written under a
+/// temporary name and renamed when complete).
+pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
+    if runs.is_empty() {
+        return Err(IoError::invalid(out, "no runs to compare"));
+    }
+    register_bundled_font();
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "plot.png".into());
+    let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
+    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    {
+        let root = BitMapBackend::new(&tmp, (1200, 1200)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let areas = root.split_evenly((PANELS.len(), 1));
+        for (area, (title, columns)) in areas.iter().zip(PANELS) {
+            let curves: Vec<(usize, Vec<(Real, Real)>)> = runs
+                .iter()
+                .enumerate()
+                .filter_map(|(k, r)| r.curve(columns).map(|c| (k, c)))
+                .collect();
+            let points = || curves.iter().flat_map(|(_, c)| c.iter());
+            let (t0, t1) =
+                points().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+            let (y0, y1) =
+                points().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
+            if curves.is_empty() || t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) {
+                area.titled(&format!("{title}: no data"), ("sans-serif", 20))
+                    .map_err(|e| fail(&e))?;
+                continue;
+            }
+            let pad = 0.05 * (y1 - y0).max(1e-12 * y1.abs().max(1.0));
+            let mut chart = ChartBuilder::on(area)
+                .caption(title, ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(80)
+                .build_cartesian_2d(t0..t1, (y0 - pad)..(y1 + pad))
+                .map_err(|e| fail(&e))?;
+            chart
+                .configure_mesh()
+                .x_desc("time (s)")
+                .label_style(("sans-serif", 14))
+                .draw()
+                .map_err(|e| fail(&e))?;
+            for (k, curve) in curves {
+                let color = Palette99::pick(k).to_rgba();
+                chart
+                    .draw_series(LineSeries::new(curve, color.stroke_width(2)))
+                    .map_err(|e| fail(&e))?
+                    .label(runs[k].label.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .label_font(("sans-serif", 14))
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| fail(&e))?;
+        }
+        root.present().map_err(|e| fail(&e))?;
+    }
+    std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))
+}

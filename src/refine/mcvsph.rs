@@ -1,0 +1,189 @@
+//! Monte Carlo vortical SPH (Ye et al., Algorithms 1 and 2, Eqs. 18–29).
+//!
+//! - At v^n (after the divergence solve): omega^n = curl v^n (Eq. 21, with the curl's sign
+//!   fixed, see `crate::sph::operators`) and its ideal successor
+//!   omega^(n+1) = omega^n + dt ((omega^n . grad) v + nu Laplacian omega^n) (Eq. 18, Alg. 1).
+//!   Algorithm 1 stretches with the gradient of v~ = v^n + dt f_non-pressure; we use the
+//!   gradient of v^n, which differs only by dt times the gradient of the viscous acceleration
+//!   (gravity is uniform and drops out), and saves a pass.
+//! - After the pressure solve: the loss omega_loss = omega^(n+1) - curl v^(n+1) (Eq. 20).
+//!   **Loss reference.** Ye et al. allow the curl before or after the projection because the
+//!   continuous curl of a pressure gradient vanishes; the discrete SPH one does not, and the
+//!   projection is where the paper (Fig. 2) says detail is lost, so we take the curl *after*
+//!   the projection: the loss then includes what the pressure solve dissipated, and it is
+//!   measured on the very field the correction is added to.
+//! - The loss smoothed onto the vortex particles (Eq. 28) and the Monte Carlo Biot–Savart
+//!   correction (Eq. 26 with P_k = 1 / N_f, Eq. 27), added to every fluid velocity (Eq. 29).
+//!   Each term carries its own particle's volume c V_k (PAPER-NOTES.md on Eq. 26), so the
+//!   prefactor is c N_f / N.
+//!
+//! **Vortex particles.** A seeded random subset of N = round(fraction N_f) fluid particles,
+//! drawn once (Algorithm 2, line 1) and moving with them.
+//!
+//! **Mollified kernel.** K(x) = -x / (4 pi |x|^3) (Eq. 14) is singular; we use the
+//! Rosenhead–Moore kernel K_d(x) = -x / (4 pi (|x|^2 + d^2)^(3/2)) with core d = one particle
+//! spacing: it is the exact field of a vortex blob of that size, bounded by
+//! 1 / (6 sqrt(3) pi d^2) |beta|, and K_d(0) = 0, so the k = i term vanishes by itself.
+
+use super::{add_scaled, Refiner, StepContext};
+use crate::sph::neighbors::permute;
+use crate::sph::operators::WallField;
+use crate::{Real, Vec3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+use super::vrsph::evolve_vorticity;
+
+/// MCVSPH state.
+pub struct Mcvsph {
+    volume_coefficient: Real,
+    /// Whether each fluid particle carries a vortex particle.
+    sampled: Vec<bool>,
+    /// The ideal vorticity omega^(n+1) of the current step.
+    ideal: Vec<Vec3>,
+}
+
+impl Mcvsph {
+    /// Draws round(`fraction` n) vortex particles (at least one) among `n` fluid particles.
+    pub fn new(n: usize, fraction: Real, volume_coefficient: Real, seed: u64) -> Self {
+        let count = ((fraction * n as Real).round() as usize).clamp(1.min(n), n);
+        let mut sampled = vec![false; n];
+        for i in sample_indices(n, count, seed) {
+            sampled[i] = true;
+        }
+        Self {
+            volume_coefficient,
+            sampled,
+            ideal: Vec::new(),
+        }
+    }
+}
+
+/// `count` distinct indices below `n`, uniformly at random from the seed.
+pub fn sample_indices(n: usize, count: usize, seed: u64) -> Vec<usize> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rand::seq::index::sample(&mut rng, n, count).into_vec()
+}
+
+impl Refiner for Mcvsph {
+    fn permute(&mut self, perm: &[u32]) {
+        permute(&mut self.sampled, perm);
+    }
+
+    fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {
+        if self.volume_coefficient == 0.0 {
+            return;
+        }
+        let ops = &ctx.ops;
+        let grad = ops.gradient(v, WallField::Velocity);
+        let omega: Vec<Vec3> = grad
+            .par_iter()
+            .map(crate::sph::operators::curl_of)
+            .collect();
+        self.ideal = evolve_vorticity(ops, &omega, &grad, ctx.nu, ctx.dt);
+    }
+
+    fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
+        if self.volume_coefficient == 0.0 || self.ideal.len() != v.len() {
+            return;
+        }
+        let ops = &ctx.ops;
+        let now = ops.curl(v, WallField::Velocity);
+        let loss: Vec<Vec3> = self
+            .ideal
+            .par_iter()
+            .zip(now.par_iter())
+            .map(|(ideal, now)| ideal - now)
+            .collect();
+        let samples: Vec<usize> = (0..v.len()).filter(|&i| self.sampled[i]).collect();
+        let k = ops.nb.kernel;
+        // Smoothed loss at each vortex particle (Eq. 28; walls carry none), times its volume.
+        let beta: Vec<Vec3> = samples
+            .par_iter()
+            .map(|&s| {
+                let mut smooth = ops.volume[s] * k.w_zero() * loss[s];
+                ops.nb.fluid_pairs(s, |j, xsj| {
+                    smooth += ops.volume[j] * k.w(xsj.norm()) * loss[j]
+                });
+                self.volume_coefficient * ops.volume[s] * smooth
+            })
+            .collect();
+        let sources: Vec<Vec3> = samples.iter().map(|&s| ops.nb.x[s]).collect();
+        let correction = monte_carlo_biot_savart(ops.nb.x, &sources, &beta, v.len(), ctx.spacing);
+        add_scaled(v, &correction, 1.0);
+    }
+}
+
+/// The Monte Carlo estimate (Ye Eq. 26, P_k = 1 / N_f) of the velocity that a population of
+/// `population` vortex particles induces at `targets`, from a uniform sample of them at
+/// `sources` with strengths `beta` (vorticity times volume): (N_f / N) times the sample's
+/// Biot–Savart sum. Unbiased for the sum over the whole population.
+pub fn monte_carlo_biot_savart(
+    targets: &[Vec3],
+    sources: &[Vec3],
+    beta: &[Vec3],
+    population: usize,
+    core: Real,
+) -> Vec<Vec3> {
+    if sources.is_empty() {
+        return vec![Vec3::zeros(); targets.len()];
+    }
+    let scale = population as Real / sources.len() as Real;
+    let scaled: Vec<Vec3> = beta.iter().map(|b| scale * b).collect();
+    biot_savart(targets, sources, &scaled, core)
+}
+
+/// The mollified Biot–Savart sum u(x) = sum_k K_d(x - x_k) x beta_k
+/// = sum_k beta_k x (x - x_k) / (4 pi (|x - x_k|^2 + d^2)^(3/2)), at every target, in
+/// parallel over targets with the sources in eight independent lanes (so the compiler can
+/// vectorise the inner loop).
+///
+/// This O(N_f N) loop is MCVSPH's cost, so it runs in f32 (twice the SIMD lanes of f64):
+/// positions are taken relative to the first source, so differences keep about 1e-7 of the
+/// domain size, and each lane's partial sum is added up in f64. The result is a velocity
+/// correction, whose relative accuracy of about 1e-6 is far below the Monte Carlo error.
+pub fn biot_savart(targets: &[Vec3], sources: &[Vec3], beta: &[Vec3], core: Real) -> Vec<Vec3> {
+    const LANES: usize = 8;
+    let n = sources.len();
+    let padded = n.div_ceil(LANES) * LANES;
+    let origin = sources.first().copied().unwrap_or_else(Vec3::zeros);
+    // Structure of arrays, padded with zero-strength sources.
+    let column = |f: &dyn Fn(usize) -> Real| -> Vec<f32> {
+        (0..padded)
+            .map(|k| if k < n { f(k) as f32 } else { 0.0 })
+            .collect()
+    };
+    let (sx, sy, sz) = (
+        column(&|k| sources[k].x - origin.x),
+        column(&|k| sources[k].y - origin.y),
+        column(&|k| sources[k].z - origin.z),
+    );
+    let (bx, by, bz) = (
+        column(&|k| beta[k].x),
+        column(&|k| beta[k].y),
+        column(&|k| beta[k].z),
+    );
+    let d2 = (core * core) as f32;
+    targets
+        .par_iter()
+        .map(|p| {
+            let p = (p - origin).cast::<f32>();
+            let (mut ux, mut uy, mut uz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
+            for c in (0..padded).step_by(LANES) {
+                for l in 0..LANES {
+                    let k = c + l;
+                    let (dx, dy, dz) = (p.x - sx[k], p.y - sy[k], p.z - sz[k]);
+                    let r2 = dx * dx + dy * dy + dz * dz + d2;
+                    let inv = 1.0 / (r2 * r2.sqrt());
+                    ux[l] += (by[k] * dz - bz[k] * dy) * inv;
+                    uy[l] += (bz[k] * dx - bx[k] * dz) * inv;
+                    uz[l] += (bx[k] * dy - by[k] * dx) * inv;
+                }
+            }
+            let sum = |a: [f32; LANES]| a.iter().map(|&x| Real::from(x)).sum::<Real>() / (4.0 * PI);
+            Vec3::new(sum(ux), sum(uy), sum(uz))
+        })
+        .collect()
+}

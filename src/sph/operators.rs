@@ -1,0 +1,151 @@
+//! Difference-form SPH differential operators shared by the turbulence refinements and the
+//! vorticity metrics (Ye et al. Eqs. 6–8, Liu et al. 2021 Eqs. 3, 4, 6).
+//!
+//! Every sum runs over the fluid neighbours j of particle i with the weight V_j = m / rho_j and
+//! `grad W_ij = grad_i W(x_i - x_j)`:
+//!
+//! - gradient (Ye Eq. 7/22): `(grad A)_i = sum_j V_j (A_j - A_i) (x) grad W_ij`, entry [a][b] is
+//!   dA_a / dx_b;
+//! - curl (Liu Eq. 6, Wang Eq. 6): `(curl A)_i = sum_j V_j (A_i - A_j) x grad W_ij`. Ye Eq. 21
+//!   prints `(A_j - A_i) x grad W_ij`, which is minus the curl with this `grad W_ij`
+//!   (PAPER-NOTES.md); the solid-body test in `tests/refine_operators.rs` fixes the sign;
+//! - Laplacian (Ye Eq. 8): `2 (d + 2) sum_j V_j (A_ij . x_ij) / (|x_ij|^2 + 0.01 h^2) grad W_ij`.
+//!
+//! The curl is the antisymmetric part of the same gradient tensor, so one pass gives both.
+//!
+//! **Walls.** With `walls` on, the Akinci boundary samples take part in every sum as neighbours
+//! with their own volume, their kinematic velocity in velocity operators, and zero in the
+//! others (walls carry no vorticity, stream function or loss: Wang et al. Sec. 4.3, Ye et al.
+//! after Eq. 28). With it off, sums run over the fluid alone.
+
+use super::neighborhood::Neighborhood;
+use crate::{Real, Vec3};
+use rayon::prelude::*;
+
+/// A 3 x 3 matrix of [`Real`] (velocity gradients).
+pub type Mat3 = nalgebra::Matrix3<Real>;
+
+/// What the boundary samples hold in an operator's sums when walls take part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WallField {
+    /// Their kinematic velocity (operators on the fluid velocity).
+    Velocity,
+    /// Zero (vorticity, stream function, losses).
+    Zero,
+}
+
+/// The operators over one step's neighbourhood.
+#[derive(Clone, Copy)]
+pub struct Operators<'a> {
+    pub nb: Neighborhood<'a>,
+    /// V_j = m / rho_j per fluid particle.
+    pub volume: &'a [Real],
+    /// Boundary samples take part in the sums.
+    pub walls: bool,
+}
+
+impl<'a> Operators<'a> {
+    /// Calls `f(V_j, A_j, x_i - x_j)` for every neighbour of i that takes part: fluid neighbours,
+    /// then boundary samples when walls are on.
+    #[inline]
+    fn pairs(&self, i: usize, a: &[Vec3], wall: WallField, mut f: impl FnMut(Real, Vec3, Vec3)) {
+        self.nb
+            .fluid_pairs(i, |j, xij| f(self.volume[j], a[j], xij));
+        if self.walls {
+            let b = self.nb.boundary;
+            self.nb.boundary_pairs(i, |k, xik| {
+                let ak = match wall {
+                    WallField::Velocity => b.v[k],
+                    WallField::Zero => Vec3::zeros(),
+                };
+                f(b.volume[k], ak, xik)
+            });
+        }
+    }
+
+    /// Gradient tensors (Ye Eq. 7) of the field `a`.
+    pub fn gradient(&self, a: &[Vec3], wall: WallField) -> Vec<Mat3> {
+        let k = self.nb.kernel;
+        (0..a.len())
+            .into_par_iter()
+            .map(|i| {
+                let ai = a[i];
+                let mut g = Mat3::zeros();
+                self.pairs(i, a, wall, |vj, aj, xij| {
+                    g += (vj * (aj - ai)) * k.grad(&xij).transpose()
+                });
+                g
+            })
+            .collect()
+    }
+
+    /// Curl (Liu Eq. 6) of the field `a`.
+    pub fn curl(&self, a: &[Vec3], wall: WallField) -> Vec<Vec3> {
+        let k = self.nb.kernel;
+        (0..a.len())
+            .into_par_iter()
+            .map(|i| {
+                let ai = a[i];
+                let mut c = Vec3::zeros();
+                self.pairs(i, a, wall, |vj, aj, xij| {
+                    c += vj * (ai - aj).cross(&k.grad(&xij))
+                });
+                c
+            })
+            .collect()
+    }
+
+    /// Laplacian (Ye Eq. 8, d = 3) of the field `a`.
+    pub fn laplacian(&self, a: &[Vec3], wall: WallField) -> Vec<Vec3> {
+        let k = self.nb.kernel;
+        let eps = 0.01 * k.support() * k.support();
+        (0..a.len())
+            .into_par_iter()
+            .map(|i| {
+                let ai = a[i];
+                let mut l = Vec3::zeros();
+                self.pairs(i, a, wall, |vj, aj, xij| {
+                    l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * k.grad(&xij)
+                });
+                10.0 * l
+            })
+            .collect()
+    }
+
+    /// Gradient (Ye Eq. 7) of a scalar field `s` (walls hold zero).
+    pub fn scalar_gradient(&self, s: &[Real]) -> Vec<Vec3> {
+        let k = self.nb.kernel;
+        (0..s.len())
+            .into_par_iter()
+            .map(|i| {
+                let si = s[i];
+                let mut g = Vec3::zeros();
+                self.nb.fluid_pairs(i, |j, xij| {
+                    g += (self.volume[j] * (s[j] - si)) * k.grad(&xij)
+                });
+                if self.walls {
+                    let b = self.nb.boundary;
+                    self.nb
+                        .boundary_pairs(i, |m, xim| g -= (b.volume[m] * si) * k.grad(&xim));
+                }
+                g
+            })
+            .collect()
+    }
+}
+
+/// The curl of a velocity field from its gradient tensor: the antisymmetric part,
+/// (dv_z/dy - dv_y/dz, dv_x/dz - dv_z/dx, dv_y/dx - dv_x/dy).
+#[inline]
+pub fn curl_of(g: &Mat3) -> Vec3 {
+    Vec3::new(
+        g[(2, 1)] - g[(1, 2)],
+        g[(0, 2)] - g[(2, 0)],
+        g[(1, 0)] - g[(0, 1)],
+    )
+}
+
+/// V_j = m / rho_j for every fluid particle.
+pub fn volumes(mass: Real, density: &[Real]) -> Vec<Real> {
+    density.par_iter().map(|rho| mass / rho).collect()
+}

@@ -31,7 +31,7 @@ pub enum RunError {
     },
     #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
     Grid {
-        cause: crate::grid::GridError,
+        cause: Box<crate::grid::GridError>,
         frames: usize,
         out: PathBuf,
     },

@@ -137,11 +137,20 @@ impl MacGrid {
     }
 
     /// Largest face speed component, m/s.
+    /// Largest |face velocity|, m/s; NaN if any face is not a number (so one pass both bounds
+    /// the step and detects a blown-up state).
     pub fn max_face_speed(&self) -> Real {
+        let nan_max = |a: Real, b: Real| {
+            if a.is_nan() || b.is_nan() {
+                Real::NAN
+            } else {
+                a.max(b)
+            }
+        };
         self.u
             .iter()
-            .flat_map(|c| c.iter())
-            .fold(0.0, |m: Real, &x| m.max(x.abs()))
+            .map(|c| Zip::from(c).par_fold(|| 0.0, |m, &x| nan_max(m, x.abs()), nan_max))
+            .fold(0.0, nan_max)
     }
 
     /// 1/2 |u|^2 integrated over the cells where `fluid` is true, per unit density.

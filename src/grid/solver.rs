@@ -438,7 +438,7 @@ impl GridSolver {
             step: self.step,
             what,
         };
-        if !speed.is_finite() || self.mac.u.iter().any(|u| u.iter().any(|x| !x.is_finite())) {
+        if !speed.is_finite() {
             return Err(unstable("a face velocity is not finite".into()));
         }
         let dt = self.settings.fixed_dt.unwrap_or(self.settings.dt_max);
@@ -477,13 +477,18 @@ fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
 
 /// |after - before| / |before| over all faces (|after| when before is zero).
 fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
-    let (mut diff, mut norm) = (0.0, 0.0);
-    for (b, a) in before.iter().zip(after) {
-        Zip::from(b).and(a).for_each(|&b, &a| {
-            diff += (a - b) * (a - b);
-            norm += b * b;
-        });
-    }
+    let add = |(d1, n1): (Real, Real), (d2, n2): (Real, Real)| (d1 + d2, n1 + n2);
+    let (diff, norm) = before
+        .iter()
+        .zip(after)
+        .map(|(b, a)| {
+            Zip::from(b).and(a).par_fold(
+                || (0.0, 0.0),
+                |(d, n), &b, &a| (d + (a - b) * (a - b), n + b * b),
+                add,
+            )
+        })
+        .fold((0.0, 0.0), add);
     if norm > 0.0 {
         (diff / norm).sqrt()
     } else {

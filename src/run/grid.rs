@@ -135,7 +135,7 @@ pub(super) fn run_grid(
 
 fn failed(cause: GridError, frames: usize, out: &Path) -> RunError {
     RunError::Grid {
-        cause,
+        cause: Box::new(cause),
         frames,
         out: out.to_path_buf(),
     }

@@ -27,10 +27,12 @@ pub fn advect_velocity(vel: &MacGrid, dt: Real, scheme: Advection) -> [Array3<Re
     std::array::from_fn(|a| advect(&vel.u[a], vel.face_stagger(a), vel, dt, scheme))
 }
 
-/// Where the fluid at grid position `g` was `dt` ago: midpoint rule, in cell units.
+/// Where the fluid at sample `idx` of a field laid out as `stagger` was `dt` ago: midpoint
+/// rule, in cell units.
 #[inline]
-fn backtrace(vel: &MacGrid, g: [Real; 3], dt_cells: Real) -> [Real; 3] {
-    let v1 = vel.velocity_at_grid(g);
+fn backtrace(vel: &MacGrid, stagger: &Stagger, idx: [usize; 3], dt_cells: Real) -> [Real; 3] {
+    let g = stagger.position(idx);
+    let v1 = vel.velocity_at_sample(stagger.face_axis(), idx);
     let mid: [Real; 3] = std::array::from_fn(|a| g[a] - 0.5 * dt_cells * v1[a]);
     let v2 = vel.velocity_at_grid(mid);
     std::array::from_fn(|a| g[a] - dt_cells * v2[a])
@@ -49,7 +51,7 @@ fn semi_lagrangian(
     let mut out = Array3::zeros(field.raw_dim());
     if !range {
         Zip::indexed(&mut out).par_for_each(|(i, j, k), o| {
-            let g = backtrace(vel, stagger.position([i, j, k]), dt_cells);
+            let g = backtrace(vel, &stagger, [i, j, k], dt_cells);
             *o = stagger.sample(field, g);
         });
         return (out, None);
@@ -60,7 +62,7 @@ fn semi_lagrangian(
         .and(&mut lo)
         .and(&mut hi)
         .par_for_each(|(i, j, k), o, l, h| {
-            let g = backtrace(vel, stagger.position([i, j, k]), dt_cells);
+            let g = backtrace(vel, &stagger, [i, j, k], dt_cells);
             (*o, *l, *h) = stagger.sample_with_range(field, g);
         });
     (out, Some([lo, hi]))

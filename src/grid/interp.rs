@@ -77,6 +77,11 @@ impl Stagger {
         trilinear(&c, f)
     }
 
+    /// The axis whose faces the samples sit on, or None for cell centres.
+    pub fn face_axis(&self) -> Option<usize> {
+        (0..3).find(|&a| self.offset[a] == 0.0)
+    }
+
     /// Position of sample (i, j, k) in cell units from the grid origin.
     #[inline]
     pub fn position(&self, idx: [usize; 3]) -> [Real; 3] {

@@ -133,6 +133,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
         .into_iter()
         .flatten()
         .min();
+    solver.stop_at(end_time);
     let mut metrics = (plan.has("metrics"))
         .then(|| MetricsRecorder::create(&out.join("metrics.csv"), &scene.output.metrics))
         .transpose()?;

@@ -222,3 +222,22 @@ fn run_writes_outputs() {
     let resolved = scene::load(&dir.path().join("scene.toml"), &[]).expect("resolved scene loads");
     assert!(resolved.output.hdf5);
 }
+
+/// A run cut short with --until lands exactly on that time: the last step is shortened.
+#[test]
+fn run_lands_on_its_end_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let options = RunOptions {
+        out: Some(dir.path().to_path_buf()),
+        overrides: vec!["output.vtk=false".into()],
+        until: Some(0.0123),
+        ..RunOptions::default()
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let summary = eddy::run::run(&path, &options).expect("runs");
+    assert!(
+        (summary.time - 0.0123).abs() < 1e-12,
+        "ended at {}",
+        summary.time
+    );
+}

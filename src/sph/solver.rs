@@ -62,6 +62,8 @@ pub struct Stepping {
     pub dt_min: Real,
     pub dt_max: Real,
     pub fixed_dt: Option<Real>,
+    /// The run's end time: the last step is shortened to land on it (never below `dt_min`).
+    pub end: Option<Real>,
 }
 
 /// What one step did.
@@ -147,6 +149,7 @@ impl SphSolver {
                 dt_min: scene.time.dt_min,
                 dt_max: scene.time.dt_max,
                 fixed_dt: scene.time.dt,
+                end: scene.time.end,
             },
             domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
             grid: CellGrid::build(&[], 2.0 * spacing),
@@ -161,6 +164,11 @@ impl SphSolver {
         };
         me.update_neighborhoods();
         me
+    }
+
+    /// Ends the run at `end` (the last step lands on it), e.g. an earlier `--until`.
+    pub fn stop_at(&mut self, end: Option<Real>) {
+        self.stepping.end = end;
     }
 
     /// Simulated time, s.
@@ -269,6 +277,10 @@ impl SphSolver {
                     speed,
                 }
             })?;
+        let dt = match self.stepping.end {
+            Some(end) if end - self.time < dt => (end - self.time).max(self.stepping.dt_min),
+            _ => dt,
+        };
         stats.dt = dt;
         if dfsph && settings.divergence_solver {
             stats.divergence = dfsph::solve(

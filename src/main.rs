@@ -42,6 +42,10 @@ enum Command {
     },
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(eddy::bench::BenchArgs),
+    /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
+    Lookup(eddy::abl::cli::LookupArgs),
+    /// Summarise an artificial-boundary-layer database.
+    Info(eddy::abl::cli::InfoArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -97,6 +101,8 @@ fn main() -> anyhow::Result<()> {
             );
         }
         Command::Bench(args) => eddy::bench::run(&args)?,
+        Command::Lookup(args) => eddy::abl::cli::lookup(&args)?,
+        Command::Info(args) => eddy::abl::cli::info(&args)?,
     }
     Ok(())
 }

@@ -122,7 +122,7 @@ impl AblDatabase {
             (MotionKind::Rotation, angular),
         ] {
             let speed = v.norm();
-            if !(speed > TINY_SPEED) {
+            if speed.is_nan() || speed <= TINY_SPEED {
                 continue;
             }
             let table = self.data.table(kind);

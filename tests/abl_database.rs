@@ -248,7 +248,7 @@ fn lookup_is_continuous_at_the_poles() {
                 .fold(0.0, Real::max)
         };
         for eps in [1e-3, 1e-6] {
-            for phi in [0.0, 0.1, 1.0, 3.0, 5.5, 6.28] {
+            for phi in [0.0, 0.1, 1.0, 3.0, 5.5, 6.2] {
                 let v = db.lookup(&Vec3::zeros(), &dir(theta0 + sign * eps, phi));
                 for p in 0..POINTS {
                     let gap = (v[p] - pole_value[p]).norm();

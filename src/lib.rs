@@ -5,6 +5,7 @@
 //! solvers, `metrics` the per-step diagnostics and probes, `io` the writers, and `run` drives a
 //! scene from its first step to its last frame.
 
+pub mod abl;
 pub mod bench;
 pub mod geometry;
 pub mod grid;

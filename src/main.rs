@@ -53,6 +53,10 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
+    Lookup(eddy::abl::cli::LookupArgs),
+    /// Summarise an artificial-boundary-layer database.
+    Info(eddy::abl::cli::InfoArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -117,6 +121,8 @@ fn main() -> anyhow::Result<()> {
             eddy::io::plot::compare(&series, &out)?;
             eprintln!("eddy: wrote {}", out.display());
         }
+        Command::Lookup(args) => eddy::abl::cli::lookup(&args)?,
+        Command::Info(args) => eddy::abl::cli::info(&args)?,
     }
     Ok(())
 }

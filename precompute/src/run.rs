@@ -1,0 +1,315 @@
+//! A precomputation run: the directions of this shard that are not finished yet, computed in
+//! parallel, each kept as a part when done, and the database written at the end.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use eddy::abl::{AblData, AblHeader, DirectionTable, MotionKind};
+use eddy::Vec3;
+
+use crate::parts;
+use crate::solve::{solve, Surface};
+use crate::spec::ObstacleSpec;
+
+/// One direction to compute: polar and azimuth sample of one motion kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Job {
+    pub kind: MotionKind,
+    pub polar: usize,
+    pub azimuth: usize,
+}
+
+/// Every direction of `spec` that needs its own solve, in the canonical order shards count in:
+/// translation then rotation, polar-major, each pole once.
+pub fn all_jobs(spec: &ObstacleSpec) -> Vec<Job> {
+    MotionKind::ALL
+        .iter()
+        .zip(spec.samplings())
+        .flat_map(|(&kind, s)| {
+            s.distinct().into_iter().map(move |(polar, azimuth)| Job {
+                kind,
+                polar,
+                azimuth,
+            })
+        })
+        .collect()
+}
+
+/// How to run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The database (or shard) to write.
+    pub out: PathBuf,
+    /// `(k, n)`: compute every n-th direction starting at k.
+    pub shard: Option<(usize, usize)>,
+    /// Keep the directions finished in `out` or its parts folder.
+    pub resume: bool,
+    /// Directions computed at once, each on one thread (so the result does not depend on
+    /// thread scheduling, sharding or resuming: every direction is computed the same way).
+    pub workers: usize,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Copy)]
+pub struct Summary {
+    pub computed: usize,
+    pub reused: usize,
+    pub points: usize,
+    /// Mean wall time of one direction on one thread, s.
+    pub seconds_per_direction: f64,
+}
+
+/// An empty database of `spec` (no direction computed) over `surface`.
+pub fn empty_database(spec: &ObstacleSpec, surface: &Surface) -> anyhow::Result<AblData> {
+    let (fingerprint, geometry_fingerprint) = spec.fingerprints()?;
+    let spacing = spec.spacing()?;
+    let [ts, rs] = spec.samplings();
+    let p = surface.points.len();
+    Ok(AblData {
+        header: AblHeader {
+            obstacle: spec.name.clone(),
+            fingerprint,
+            geometry_fingerprint,
+            beta: spec.layer.beta,
+            layer_thickness: spec.layer.thickness * spacing,
+            spacing,
+            settings: spec.settings_toml(),
+        },
+        points: surface.points.clone(),
+        normals: surface.normals.clone(),
+        translation: DirectionTable::empty(ts, p),
+        rotation: DirectionTable::empty(rs, p),
+    })
+}
+
+/// Parses `k/N`.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (k, n) = s.split_once('/').ok_or("expected k/N, e.g. 0/4")?;
+    let k: usize = k
+        .trim()
+        .parse()
+        .map_err(|e| format!("shard index `{k}`: {e}"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|e| format!("shard count `{n}`: {e}"))?;
+    if n == 0 || k >= n {
+        return Err(format!("shard {k}/{n}: need 0 <= k < N"));
+    }
+    Ok((k, n))
+}
+
+/// Runs the precomputation of `spec` as `options` say.
+pub fn precompute(spec: &ObstacleSpec, options: &RunOptions) -> anyhow::Result<Summary> {
+    let surface = Surface::of(spec)?;
+    let mut data = empty_database(spec, &surface)?;
+    let fingerprint = data.header.fingerprint.clone();
+    let dir = parts::folder(&options.out);
+    let mut reused = 0;
+    if options.resume {
+        if options.out.exists() {
+            let old = AblData::read(&options.out)?;
+            if old.header.fingerprint != fingerprint || old.points != data.points {
+                bail!(
+                    "{} was computed with other settings or geometry; --resume needs the same \
+                     obstacle file and overrides",
+                    options.out.display()
+                );
+            }
+            data.translation = old.translation;
+            data.rotation = old.rotation;
+        }
+        for (job, values) in parts::read_all(&dir, &fingerprint, surface.points.len())? {
+            data.table_mut(job.kind)
+                .set(job.polar, job.azimuth, &values);
+        }
+    } else if dir.exists() {
+        bail!(
+            "{} holds directions finished by an interrupted run: pass --resume to keep them, or \
+             delete the folder",
+            dir.display()
+        );
+    }
+    let (k, n) = options.shard.unwrap_or((0, 1));
+    let mine: Vec<Job> = all_jobs(spec)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % n == k)
+        .map(|(_, j)| j)
+        .collect();
+    let todo: Vec<Job> = mine
+        .iter()
+        .copied()
+        .filter(|j| {
+            let t = data.table(j.kind);
+            !t.complete[t.sampling.row(j.polar, j.azimuth)]
+        })
+        .collect();
+    reused += mine.len() - todo.len();
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let bar = progress_bar(options.progress, mine.len() as u64, reused as u64);
+    let mut seconds = 0.0;
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<(Job, anyhow::Result<Vec<Vec3>>, f64)>();
+    let mut failure = None;
+    std::thread::scope(|scope| {
+        for _ in 0..options.workers.max(1).min(todo.len().max(1)) {
+            let tx = tx.clone();
+            let (todo, next, stop, surface, dir, fingerprint) =
+                (&todo, &next, &stop, &surface, &dir, &fingerprint);
+            scope.spawn(move || {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+                while !stop.load(Ordering::Relaxed) {
+                    let Some(&job) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
+                        break;
+                    };
+                    let started = Instant::now();
+                    let result =
+                        pool.as_ref()
+                            .map_err(|e| anyhow::anyhow!("{e}"))
+                            .and_then(|pool| {
+                                let s =
+                                    spec.samplings()[usize::from(job.kind == MotionKind::Rotation)];
+                                let d = s.direction(job.polar, job.azimuth);
+                                let values = pool.install(|| solve(spec, surface, job.kind, &d))?;
+                                parts::write(dir, fingerprint, &job, &values)?;
+                                Ok(values)
+                            });
+                    let failed = result.is_err();
+                    let _ = tx.send((job, result, started.elapsed().as_secs_f64()));
+                    if failed {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        for (job, result, secs) in rx {
+            match result {
+                Ok(values) => {
+                    data.table_mut(job.kind)
+                        .set(job.polar, job.azimuth, &values);
+                    seconds += secs;
+                    bar.inc(1);
+                    bar.set_message(format!("{secs:.1} s/direction"));
+                }
+                Err(e) => {
+                    stop.store(true, Ordering::Relaxed);
+                    failure.get_or_insert(e.context(format!(
+                        "{} direction (polar {}, azimuth {})",
+                        job.kind.name(),
+                        job.polar,
+                        job.azimuth
+                    )));
+                }
+            }
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    data.write(&options.out)?;
+    std::fs::remove_dir_all(&dir).with_context(|| format!("removing {}", dir.display()))?;
+    Ok(Summary {
+        computed: todo.len(),
+        reused,
+        points: surface.points.len(),
+        seconds_per_direction: if todo.is_empty() {
+            0.0
+        } else {
+            seconds / todo.len() as f64
+        },
+    })
+}
+
+fn progress_bar(show: bool, len: u64, done: u64) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} directions, {elapsed} elapsed, ~{eta} left, {msg}",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_position(done);
+    bar
+}
+
+/// Combines shard files into one database: all must share the fingerprint, and every direction
+/// must be finished in exactly one of them (no overlap, no gap).
+pub fn merge(shards: &[PathBuf], out: &Path) -> anyhow::Result<()> {
+    let (first, rest) = shards
+        .split_first()
+        .context("merge needs at least one shard")?;
+    let mut merged = AblData::read(first)?;
+    let mut owner: Vec<Vec<Option<&Path>>> = MotionKind::ALL
+        .iter()
+        .map(|&k| {
+            merged
+                .table(k)
+                .complete
+                .iter()
+                .map(|&c| c.then_some(first.as_path()))
+                .collect()
+        })
+        .collect();
+    for path in rest {
+        let shard = AblData::read(path)?;
+        if shard.header != merged.header
+            || shard.points != merged.points
+            || shard.normals != merged.normals
+        {
+            bail!(
+                "{} and {} come from different precomputations (fingerprint or points differ)",
+                first.display(),
+                path.display()
+            );
+        }
+        for (ki, kind) in MotionKind::ALL.into_iter().enumerate() {
+            let src = shard.table(kind);
+            let points = merged.points.len();
+            let p = points * 3;
+            let dst = merged.table_mut(kind);
+            if src.sampling != dst.sampling {
+                bail!("{} samples {} differently", path.display(), kind.name());
+            }
+            for row in (0..src.complete.len()).filter(|&r| src.complete[r]) {
+                if let Some(other) = owner[ki][row] {
+                    let a = src.sampling.azimuth;
+                    bail!(
+                        "shards overlap: {} direction (polar {}, azimuth {}) is in both {} and {}",
+                        kind.name(),
+                        row / a,
+                        row % a,
+                        other.display(),
+                        path.display()
+                    );
+                }
+                owner[ki][row] = Some(path.as_path());
+                dst.omega[row * p..(row + 1) * p].copy_from_slice(src.row(row, points));
+                dst.complete[row] = true;
+            }
+        }
+    }
+    for kind in MotionKind::ALL {
+        let missing = merged.table(kind).missing();
+        if let Some((i, j)) = missing.first() {
+            bail!(
+                "shards leave a gap: {} {} direction(s) in none of them (first: polar {i}, \
+                 azimuth {j}); run the missing shard",
+                missing.len(),
+                kind.name()
+            );
+        }
+    }
+    merged.write(out)?;
+    Ok(())
+}

@@ -1,0 +1,179 @@
+//! One direction of the precomputation (Pfaff et al. 2009, section 5.1 and Figure 5): run the
+//! MAC-grid solver with raised viscosity, average the flow, and evaluate
+//! `omega_pre = beta (U(x + l n) x n)` at every boundary point.
+
+use std::path::Path;
+
+use anyhow::{bail, Context};
+use eddy::abl::MotionKind;
+use eddy::grid::GridSolver;
+use eddy::scene::{GridBoundary, GridSide, Scene, ViscosityScheme};
+use eddy::{Point3, Real, Vec3};
+
+use crate::spec::ObstacleSpec;
+
+/// Flow components below this count as zero when choosing inflow sides, so a direction along
+/// an axis (whose other components are rounding noise) gets open sides, not inflows of 1e-17.
+const AXIS_NOISE: Real = 1e-9;
+
+/// The boundary points and normals, in the object's frame.
+#[derive(Debug, Clone)]
+pub struct Surface {
+    pub points: Vec<Point3>,
+    pub normals: Vec<Vec3>,
+}
+
+impl Surface {
+    /// Points about `layer.point_spacing` cells apart on the obstacle's surface.
+    pub fn of(spec: &ObstacleSpec) -> anyhow::Result<Self> {
+        let body = spec.body()?;
+        let points = body.sample_surface(spec.layer.point_spacing * spec.spacing()?);
+        let normals = points.iter().map(|p| body.normal_local(p)).collect();
+        Ok(Self { points, normals })
+    }
+}
+
+/// The grid scene of one direction. Translation: the object is fixed and the free stream
+/// `-direction` (the object moving along `direction` through still fluid) enters through every
+/// side it flows in by and leaves through the others, which are open. Rotation: still fluid,
+/// the object spins at 1 rad/s about `direction`, and every side is open (zero pressure), so the
+/// pumping of a spinning body leaves and enters as it would in unbounded fluid, rather than
+/// being spun up or down by walls.
+pub fn scene(spec: &ObstacleSpec, kind: MotionKind, direction: &Vec3) -> anyhow::Result<Scene> {
+    let h = spec.half_side()?;
+    let g = &spec.grid;
+    let dx = spec.spacing()?;
+    let speed = match kind {
+        MotionKind::Translation => 1.0,
+        MotionKind::Rotation => reach(spec)?,
+    };
+    let dt = g.cfl * dx / speed;
+    let text = format!(
+        r#"
+        name = "abl_precompute"
+        gravity = [0.0, 0.0, 0.0]
+        domain = {{ min = [{m:?}, {m:?}, {m:?}], max = [{h:?}, {h:?}, {h:?}] }}
+        time = {{ steps = 1, dt = {dt:?}, dt_max = {dt:?}, dt_min = {dt_min:?} }}
+        viscosity = {{ kinematic = {nu:?} }}
+        [grid]
+        resolution = [{n}, {n}, {n}]
+        pressure_tolerance = {tol:?}
+        "#,
+        m = -h,
+        dt_min = dt * 1e-3,
+        nu = g.viscosity,
+        n = g.resolution,
+        tol = g.tolerance,
+    );
+    let mut scene = eddy::scene::parse_str(&text, Path::new("precompute.toml"), &[])
+        .context("building the precomputation scene")?;
+    let flow = -direction;
+    let grid = scene.grid.as_mut().context("the scene has a grid")?;
+    grid.advection = g.advection;
+    grid.viscosity_scheme = ViscosityScheme::BackwardEuler;
+    let angular = match kind {
+        MotionKind::Translation => {
+            grid.initial_velocity = flow.into();
+            let side = |inward: Real| {
+                if inward > AXIS_NOISE {
+                    GridSide::Inflow(flow.into())
+                } else {
+                    GridSide::Open
+                }
+            };
+            grid.boundary = GridBoundary {
+                x_min: side(flow.x),
+                x_max: side(-flow.x),
+                y_min: side(flow.y),
+                y_max: side(-flow.y),
+                z_min: side(flow.z),
+                z_max: side(-flow.z),
+            };
+            [0.0; 3]
+        }
+        MotionKind::Rotation => {
+            grid.boundary = GridBoundary {
+                x_min: GridSide::Open,
+                x_max: GridSide::Open,
+                y_min: GridSide::Open,
+                y_max: GridSide::Open,
+                z_min: GridSide::Open,
+                z_max: GridSide::Open,
+            };
+            (*direction).into()
+        }
+    };
+    scene.obstacles = vec![spec.body_entry(angular)];
+    Ok(scene)
+}
+
+/// Largest distance of the object's bounding box from its origin: the fastest wall speed at
+/// 1 rad/s.
+fn reach(spec: &ObstacleSpec) -> anyhow::Result<Real> {
+    let (lo, hi) = spec.body()?.local_aabb();
+    Ok(lo.coords.abs().sup(&hi.coords.abs()).norm())
+}
+
+/// omega_pre per unit speed at every point of `surface`, object frame, for one direction.
+///
+/// The velocity just outside the layer is taken relative to the wall and in the object's frame,
+/// `U_rel = R^T (U(x_e) - v_body(x_e))` at `x_e = pose (x + l n)`, and averaged over the
+/// averaging steps: for the fixed object of a translation this is the paper's average of U;
+/// for a spinning object it is the average in the co-rotating frame, where the boundary layer
+/// is steady, and a spinning sphere in inviscid fluid keeps its full slip (the confined
+/// vorticity a real no-slip wall would hold).
+pub fn solve(
+    spec: &ObstacleSpec,
+    surface: &Surface,
+    kind: MotionKind,
+    direction: &Vec3,
+) -> anyhow::Result<Vec<Vec3>> {
+    let scene = scene(spec, kind, direction)?;
+    let body = eddy::geometry::RigidBody::from_scene(&scene.obstacles[0], 0)?;
+    let mut solver = GridSolver::new(&scene, vec![body])?;
+    let cells = spec.grid.resolution.pow(3);
+    if solver.bounds.fluid_cells() == cells {
+        bail!(
+            "obstacle '{}' covers no cell centre of the {n}^3 precomputation grid: raise \
+             grid.resolution or lower grid.domain",
+            spec.name,
+            n = spec.grid.resolution
+        );
+    }
+    if kind == MotionKind::Translation {
+        // Start from the projected free stream: the discrete potential flow around the object,
+        // which is already the inviscid answer and close to the viscous one away from the wall.
+        let flow = -direction;
+        solver.set_velocity(|_| flow)?;
+    }
+    for _ in 0..spec.grid.stabilise_steps {
+        solver.advance(None)?;
+    }
+    let l = spec.layer.thickness * spec.spacing()?;
+    let outside: Vec<Point3> = surface
+        .points
+        .iter()
+        .zip(&surface.normals)
+        .map(|(x, n)| x + n * l)
+        .collect();
+    let mut sum = vec![Vec3::zeros(); outside.len()];
+    let mut time = 0.0;
+    for _ in 0..spec.grid.average_steps {
+        let dt = solver.advance(None)?.dt;
+        let body = &solver.bodies[0];
+        let t = solver.time();
+        let pose = body.pose(t);
+        for (s, xe) in sum.iter_mut().zip(&outside) {
+            let world = pose * xe;
+            let u = solver.mac.velocity_at(&world.coords) - body.velocity_at(t, &world);
+            *s += pose.rotation.inverse_transform_vector(&u) * dt;
+        }
+        time += dt;
+    }
+    let beta = spec.layer.beta;
+    Ok(sum
+        .iter()
+        .zip(&surface.normals)
+        .map(|(s, n)| (s / time).cross(n) * beta)
+        .collect())
+}

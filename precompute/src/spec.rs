@@ -1,0 +1,289 @@
+//! The obstacle file: the shape, the precomputation grid, the layer and the direction sampling,
+//! read with `--set dotted.key=value` overrides and checked with errors that name the key.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use eddy::abl::{geometry_fingerprint, hash_hex, Sampling};
+use eddy::geometry::RigidBody;
+use eddy::scene::{Advection, Body, Shape};
+use eddy::Real;
+use serde::{Deserialize, Serialize};
+
+/// One obstacle and how to precompute its artificial boundary layer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    /// Name stored in the database.
+    pub name: String,
+    /// The shape in the object's frame (meshes relative to the obstacle file).
+    pub shape: Shape,
+    #[serde(default)]
+    pub grid: GridSettings,
+    #[serde(default)]
+    pub layer: LayerSettings,
+    #[serde(default)]
+    pub sampling: SamplingSettings,
+}
+
+/// The precomputation grid: a cube centred on the object's origin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSettings {
+    /// Cells along each side of the cube; the spacing is the cube's side over this.
+    #[serde(default = "d_resolution")]
+    pub resolution: usize,
+    /// Side of the cube as a multiple of the object's extent (twice its largest local
+    /// coordinate), so the box does not disturb the flow near the object (section 5.1).
+    #[serde(default = "d_domain")]
+    pub domain: Real,
+    /// The raised kinematic viscosity, m^2/s (section 5.1); 0 is inviscid with free slip.
+    #[serde(default = "d_viscosity")]
+    pub viscosity: Real,
+    /// Steps before averaging starts (50 in the paper).
+    #[serde(default = "d_steps")]
+    pub stabilise_steps: u32,
+    /// Steps averaged (50 in the paper).
+    #[serde(default = "d_steps")]
+    pub average_steps: u32,
+    /// Time step as a CFL number at the largest wall or inflow speed: dt = cfl dx / speed.
+    #[serde(default = "d_cfl")]
+    pub cfl: Real,
+    /// Advection scheme of the velocity.
+    #[serde(default = "d_advection")]
+    pub advection: Advection,
+    /// Relative residual of the pressure and viscosity solves.
+    #[serde(default = "d_tolerance")]
+    pub tolerance: Real,
+}
+
+/// The artificial boundary layer of Figure 5.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerSettings {
+    /// Vortex gain beta of Eq. 1.
+    #[serde(default = "d_beta")]
+    pub beta: Real,
+    /// Layer thickness l in cells of the precomputation grid (1-2 in the paper).
+    #[serde(default = "d_thickness")]
+    pub thickness: Real,
+    /// Spacing of the boundary points in cells.
+    #[serde(default = "d_point_spacing")]
+    pub point_spacing: Real,
+}
+
+/// Direction samples [polar (poles included), azimuth] for each motion (10 x 20 in the paper).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SamplingSettings {
+    #[serde(default = "d_sampling")]
+    pub translation: [usize; 2],
+    #[serde(default = "d_sampling")]
+    pub rotation: [usize; 2],
+}
+
+fn d_resolution() -> usize {
+    32
+}
+fn d_domain() -> Real {
+    4.0
+}
+fn d_viscosity() -> Real {
+    0.02
+}
+fn d_steps() -> u32 {
+    50
+}
+fn d_cfl() -> Real {
+    1.0
+}
+fn d_advection() -> Advection {
+    Advection::SemiLagrangian
+}
+fn d_tolerance() -> Real {
+    1e-5
+}
+fn d_beta() -> Real {
+    1.0
+}
+fn d_thickness() -> Real {
+    1.5
+}
+fn d_point_spacing() -> Real {
+    1.0
+}
+fn d_sampling() -> [usize; 2] {
+    [10, 20]
+}
+
+impl Default for GridSettings {
+    fn default() -> Self {
+        toml::from_str("").expect("every grid key has a default")
+    }
+}
+impl Default for LayerSettings {
+    fn default() -> Self {
+        toml::from_str("").expect("every layer key has a default")
+    }
+}
+impl Default for SamplingSettings {
+    fn default() -> Self {
+        toml::from_str("").expect("every sampling key has a default")
+    }
+}
+
+impl ObstacleSpec {
+    /// Reads `path`, applies the overrides, resolves a mesh path against the file's folder and
+    /// validates.
+    pub fn load(path: &Path, overrides: &[String]) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading obstacle file {}", path.display()))?;
+        Self::parse(&text, path, overrides)
+    }
+
+    /// [`Self::load`] of text already in memory; `origin` names it in messages.
+    pub fn parse(text: &str, origin: &Path, overrides: &[String]) -> anyhow::Result<Self> {
+        let mut table: toml::Table =
+            toml::from_str(text).with_context(|| format!("{}: TOML syntax", origin.display()))?;
+        for o in overrides {
+            eddy::scene::apply_override(&mut table, o)?;
+        }
+        let mut spec: Self = table
+            .try_into()
+            .with_context(|| format!("{}: not an obstacle file", origin.display()))?;
+        if let Shape::Mesh { path, .. } = &mut spec.shape {
+            if path.is_relative() {
+                let base = origin.parent().map(PathBuf::from).unwrap_or_default();
+                *path = base.join(&*path);
+            }
+        }
+        spec.validate()
+            .with_context(|| format!("{}: invalid obstacle file", origin.display()))?;
+        Ok(spec)
+    }
+
+    /// Checks every value's range.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        let g = &self.grid;
+        let check = |key: &str, v: Real, ok: bool, allowed: &str| -> anyhow::Result<()> {
+            if ok && v.is_finite() {
+                Ok(())
+            } else {
+                bail!("`{key}` = {v}; allowed: {allowed}")
+            }
+        };
+        let r = g.resolution as Real;
+        check(
+            "grid.resolution",
+            r,
+            (8.0..=512.0).contains(&r),
+            "8 to 512 cells",
+        )?;
+        check(
+            "grid.domain",
+            g.domain,
+            g.domain >= 1.5,
+            "at least 1.5 times the extent",
+        )?;
+        check("grid.viscosity", g.viscosity, g.viscosity >= 0.0, ">= 0")?;
+        let avg = Real::from(g.average_steps);
+        check("grid.average_steps", avg, avg >= 1.0, "at least 1")?;
+        check("grid.cfl", g.cfl, g.cfl > 0.0 && g.cfl <= 5.0, "(0, 5]")?;
+        check(
+            "grid.tolerance",
+            g.tolerance,
+            g.tolerance > 0.0 && g.tolerance <= 0.1,
+            "(0, 0.1]",
+        )?;
+        let l = &self.layer;
+        check("layer.beta", l.beta, true, "any finite number")?;
+        check(
+            "layer.thickness",
+            l.thickness,
+            l.thickness > 0.0 && l.thickness <= 10.0,
+            "(0, 10] cells",
+        )?;
+        check(
+            "layer.point_spacing",
+            l.point_spacing,
+            l.point_spacing >= 0.1 && l.point_spacing <= 10.0,
+            "[0.1, 10] cells",
+        )?;
+        for (key, s) in [
+            ("sampling.translation", self.sampling.translation),
+            ("sampling.rotation", self.sampling.rotation),
+        ] {
+            Sampling::new(s[0], s[1]).map_err(|e| anyhow::anyhow!("`{key}`: {e}"))?;
+        }
+        // Builds the body, so a bad shape or unreadable mesh is reported here.
+        self.body()?;
+        Ok(())
+    }
+
+    /// The obstacle at rest at the origin.
+    pub fn body(&self) -> anyhow::Result<RigidBody> {
+        Ok(RigidBody::from_scene(&self.body_entry([0.0; 3]), 0)?)
+    }
+
+    /// The scene entry of the obstacle spinning at `angular` rad/s about its origin.
+    pub fn body_entry(&self, angular: [Real; 3]) -> Body {
+        Body {
+            name: Some(self.name.clone()),
+            shape: self.shape.clone(),
+            position: [0.0; 3],
+            rotation: [0.0; 3],
+            motion: eddy::scene::Motion {
+                angular,
+                ..Default::default()
+            },
+        }
+    }
+
+    /// Half the side of the precomputation cube, m.
+    pub fn half_side(&self) -> anyhow::Result<Real> {
+        let (lo, hi) = self.body()?.local_aabb();
+        let reach = lo.coords.abs().sup(&hi.coords.abs()).max();
+        Ok(self.grid.domain * reach)
+    }
+
+    /// Cell size, m.
+    pub fn spacing(&self) -> anyhow::Result<Real> {
+        Ok(2.0 * self.half_side()? / self.grid.resolution as Real)
+    }
+
+    /// The samplings of translation and rotation.
+    pub fn samplings(&self) -> [Sampling; 2] {
+        [self.sampling.translation, self.sampling.rotation]
+            .map(|[p, a]| Sampling::new(p, a).expect("validated"))
+    }
+
+    /// Everything but the name as TOML: what the fingerprint covers and the database records.
+    pub fn settings_toml(&self) -> String {
+        #[derive(Serialize)]
+        struct Settings<'a> {
+            shape: &'a Shape,
+            grid: &'a GridSettings,
+            layer: &'a LayerSettings,
+            sampling: &'a SamplingSettings,
+        }
+        toml::to_string(&Settings {
+            shape: &self.shape,
+            grid: &self.grid,
+            layer: &self.layer,
+            sampling: &self.sampling,
+        })
+        .unwrap_or_else(|e| format!("# settings could not be written: {e}\n"))
+    }
+
+    /// (fingerprint of geometry and settings, fingerprint of the geometry alone).
+    pub fn fingerprints(&self) -> anyhow::Result<(String, String)> {
+        let geometry = geometry_fingerprint(&self.shape)?;
+        // The mesh path is not part of the identity; its bytes are, through `geometry`.
+        let mut settings = self.clone();
+        if let Shape::Mesh { path, .. } = &mut settings.shape {
+            *path = PathBuf::new();
+        }
+        let all = hash_hex(&[geometry.as_bytes(), settings.settings_toml().as_bytes()]);
+        Ok((all, geometry))
+    }
+}

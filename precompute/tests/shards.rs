@@ -1,0 +1,136 @@
+//! Sharding, merging and resuming: shards merged equal the unsharded database bit for bit,
+//! overlaps and gaps are refused, and a killed run resumed completes the same database.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use eddy::abl::{AblData, AblDatabase};
+use eddy_precompute::{merge, parts, precompute, ObstacleSpec, RunOptions};
+
+const OBSTACLE: &str = r#"
+name = "small sphere"
+shape = { type = "sphere", radius = 0.5 }
+[grid]
+resolution = 16
+domain = 3.0
+stabilise_steps = 10
+average_steps = 10
+[sampling]
+translation = [3, 4]
+rotation = [4, 3]
+"#;
+
+fn spec(dir: &Path) -> (ObstacleSpec, PathBuf) {
+    let path = dir.join("sphere.toml");
+    std::fs::write(&path, OBSTACLE).expect("writes the obstacle file");
+    (ObstacleSpec::load(&path, &[]).expect("valid"), path)
+}
+
+fn options(out: PathBuf, shard: Option<(usize, usize)>, resume: bool) -> RunOptions {
+    RunOptions {
+        out,
+        shard,
+        resume,
+        workers: 2,
+        progress: false,
+    }
+}
+
+#[test]
+fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let (spec, _) = spec(tmp.path());
+    let full = tmp.path().join("full.h5");
+    let s = precompute(&spec, &options(full.clone(), None, false)).expect("runs");
+    // Translation 1 + 4 + 1, rotation 1 + 2 * 3 + 1 distinct directions.
+    assert_eq!((s.computed, s.reused), (14, 0));
+    assert!(
+        !parts::folder(&full).exists(),
+        "parts are removed when done"
+    );
+    let db = AblDatabase::open(&full, Some(&spec.shape)).expect("complete and ours");
+
+    let shards: Vec<PathBuf> = (0..3)
+        .map(|k| {
+            let out = tmp.path().join(format!("shard{k}.h5"));
+            precompute(&spec, &options(out.clone(), Some((k, 3)), false)).expect("runs");
+            out
+        })
+        .collect();
+    let e = AblDatabase::open(&shards[0], None).expect_err("a shard is incomplete");
+    assert!(e.to_string().contains("incomplete"), "{e}");
+    let merged = tmp.path().join("merged.h5");
+    merge(&shards, &merged).expect("merges");
+    assert_eq!(AblData::read(&merged).expect("reads"), *db.data());
+
+    let e = merge(&shards[..2], &tmp.path().join("gap.h5")).expect_err("a gap");
+    assert!(format!("{e:#}").contains("gap"), "{e:#}");
+    let twice = [
+        shards[0].clone(),
+        shards[1].clone(),
+        shards[2].clone(),
+        shards[1].clone(),
+    ];
+    let e = merge(&twice, &tmp.path().join("overlap.h5")).expect_err("an overlap");
+    assert!(
+        format!("{e:#}").contains("overlap") && format!("{e:#}").contains("shard1.h5"),
+        "{e:#}"
+    );
+}
+
+#[test]
+fn a_killed_run_resumes_to_the_same_database() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let (spec, file) = spec(tmp.path());
+    let out = tmp.path().join("db.h5");
+    let dir = parts::folder(&out);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_eddy-precompute"))
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .args(["--jobs", "1"])
+        .spawn()
+        .expect("starts eddy-precompute");
+    let started = Instant::now();
+    let finished = |d: &Path| {
+        std::fs::read_dir(d).map_or(0, |r| {
+            r.filter(|e| {
+                e.as_ref()
+                    .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "bin"))
+            })
+            .count()
+        })
+    };
+    while finished(&dir) < 2 {
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "no direction finished"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert!(
+        child.try_wait().expect("polls").is_none(),
+        "killed before the end"
+    );
+    child.kill().expect("kills");
+    child.wait().expect("reaps");
+    assert!(!out.exists(), "no database from a killed run");
+    let done = finished(&dir);
+
+    let e = precompute(&spec, &options(out.clone(), None, false)).expect_err("parts present");
+    assert!(e.to_string().contains("--resume"), "{e}");
+    let s = precompute(&spec, &options(out.clone(), None, true)).expect("resumes");
+    assert_eq!(s.reused, done);
+    assert_eq!(s.computed + s.reused, 14);
+
+    let fresh = tmp.path().join("fresh.h5");
+    precompute(&spec, &options(fresh.clone(), None, false)).expect("runs");
+    assert_eq!(
+        AblData::read(&out).expect("reads"),
+        AblData::read(&fresh).expect("reads")
+    );
+    // Resuming a finished database computes nothing.
+    let again = precompute(&spec, &options(out.clone(), None, true)).expect("resumes");
+    assert_eq!((again.computed, again.reused), (0, 14));
+}

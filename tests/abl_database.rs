@@ -1,0 +1,359 @@
+//! The ABL database without a fluid solve: write/read round trip and the h5py layout, lookup
+//! exactness at samples, linearity in speed, continuity across the azimuth seam and at the
+//! poles, the world frame, and clear errors for wrong, truncated, foreign or incomplete files.
+
+use eddy::abl::{
+    geometry_fingerprint, AblData, AblDatabase, AblError, AblHeader, DirectionTable, MotionKind,
+    Sampling, ABL_FORMAT, ABL_FORMAT_VERSION,
+};
+use eddy::scene::Shape;
+use eddy::{Point3, Real, Vec3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use std::path::Path;
+
+const POINTS: usize = 37;
+
+fn sphere() -> Shape {
+    Shape::Sphere { radius: 0.5 }
+}
+
+/// A smooth, non-linear vector function of the direction d for point p, standing in for omega.
+fn field(p: usize, d: &Vec3, kind: MotionKind) -> Vec3 {
+    let s = p as Real * 0.37
+        + if kind == MotionKind::Rotation {
+            1.0
+        } else {
+            0.0
+        };
+    Vec3::new(
+        d.x * s.cos() + d.y * d.z,
+        d.y - 0.5 * d.x * d.x + s.sin(),
+        d.z * (1.0 + s) + d.x * d.y * d.z,
+    )
+}
+
+/// A complete database over `sampling` whose rows hold [`field`] at the sampled directions.
+fn synthetic(sampling: Sampling) -> AblData {
+    let points: Vec<Point3> = (0..POINTS)
+        .map(|p| {
+            let a = p as Real;
+            Point3::new(a.sin(), a.cos(), 0.1 * a)
+        })
+        .collect();
+    let normals = points.iter().map(|x| x.coords.normalize()).collect();
+    let table = |kind| {
+        let mut t = DirectionTable::empty(sampling, POINTS);
+        for (i, j) in sampling.distinct() {
+            let d = sampling.direction(i, j);
+            let values: Vec<Vec3> = (0..POINTS).map(|p| field(p, &d, kind)).collect();
+            t.set(i, j, &values);
+        }
+        t
+    };
+    AblData {
+        header: AblHeader {
+            obstacle: "sphere".into(),
+            fingerprint: "f".repeat(64),
+            geometry_fingerprint: geometry_fingerprint(&sphere()).expect("analytic shape"),
+            beta: 1.5,
+            layer_thickness: 0.1,
+            spacing: 0.0625,
+            settings: "resolution = 16\n".into(),
+        },
+        points,
+        normals,
+        translation: table(MotionKind::Translation),
+        rotation: table(MotionKind::Rotation),
+    }
+}
+
+fn written(dir: &Path, data: &AblData) -> std::path::PathBuf {
+    let path = dir.join("db.h5");
+    data.write(&path).expect("writes");
+    path
+}
+
+fn sampling() -> Sampling {
+    Sampling::new(10, 20).expect("valid sampling")
+}
+
+/// Direction from polar and azimuth angles.
+fn dir(theta: Real, phi: Real) -> Vec3 {
+    Vec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
+}
+
+#[test]
+fn round_trip_is_identical_and_leaves_no_temporary() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let data = synthetic(Sampling::new(5, 7).expect("valid"));
+    let path = written(tmp.path(), &data);
+    let back = AblData::read(&path).expect("reads");
+    assert_eq!(back, data);
+    let names: Vec<_> = std::fs::read_dir(tmp.path())
+        .expect("lists")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("db.h5")]);
+}
+
+#[test]
+fn layout_is_as_documented_for_h5py() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = Sampling::new(6, 8).expect("valid");
+    let data = synthetic(s);
+    let path = written(tmp.path(), &data);
+    let file = hdf5::File::open(&path).expect("opens");
+    let text = |name: &str| -> String {
+        let v: hdf5::types::VarLenUnicode = file.attr(name).expect(name).read_scalar().expect(name);
+        v.as_str().to_owned()
+    };
+    assert_eq!(text("format"), ABL_FORMAT);
+    assert!(text("units").contains("1/s per m/s"));
+    assert_eq!(text("obstacle"), "sphere");
+    let version: i64 = file.attr("format_version").unwrap().read_scalar().unwrap();
+    assert_eq!(version, ABL_FORMAT_VERSION);
+    let beta: f64 = file.attr("beta").unwrap().read_scalar().unwrap();
+    assert_eq!(beta, 1.5);
+    let f64_set = |g: &hdf5::Group, name: &str, shape: Vec<usize>| {
+        let ds = g.dataset(name).expect(name);
+        assert!(ds.dtype().unwrap().is::<f64>(), "{name} is f64");
+        assert_eq!(ds.shape(), shape, "{name}");
+        ds.read_raw::<f64>().unwrap()
+    };
+    let pts = f64_set(&file, "points", vec![POINTS, 3]);
+    assert_eq!(pts[3..6], data.points[1].coords.as_slice()[..]);
+    f64_set(&file, "normals", vec![POINTS, 3]);
+    for kind in MotionKind::ALL {
+        let g = file.group(kind.name()).expect("group");
+        let n: u64 = g.attr("polar_samples").unwrap().read_scalar().unwrap();
+        let m: u64 = g.attr("azimuth_samples").unwrap().read_scalar().unwrap();
+        assert_eq!((n, m), (6, 8));
+        let polar = f64_set(&g, "polar_angles", vec![6]);
+        assert_eq!((polar[0], polar[5]), (0.0, std::f64::consts::PI));
+        f64_set(&g, "azimuth_angles", vec![8]);
+        let dirs = f64_set(&g, "directions", vec![48, 3]);
+        // Row i * n_azimuth + j is direction (theta_i, phi_j).
+        let d = s.direction(2, 3);
+        assert_eq!(dirs[3 * s.row(2, 3)..3 * s.row(2, 3) + 3], d.as_slice()[..]);
+        let omega = f64_set(&g, "omega", vec![48, POINTS, 3]);
+        let at = (s.row(2, 3) * POINTS + 4) * 3;
+        let expect = field(4, &d, kind);
+        assert_eq!(omega[at..at + 3], expect.as_slice()[..]);
+        let done = g.dataset("complete").unwrap();
+        assert!(done.dtype().unwrap().is::<u8>());
+        assert!(done.read_raw::<u8>().unwrap().iter().all(|&c| c == 1));
+    }
+}
+
+#[test]
+fn lookup_at_samples_is_exact_and_linear_in_speed() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = sampling();
+    let path = written(tmp.path(), &synthetic(s));
+    let db = AblDatabase::open(&path, Some(&sphere())).expect("opens");
+    for (i, j) in [(0, 0), (1, 0), (3, 7), (5, 19), (8, 11), (9, 0)] {
+        let d = s.direction(i, j);
+        for scale in [1.0, 2.5] {
+            let v = d * scale;
+            // Exactly the stored row times |v| (the norm as computed, which may round).
+            let speed = v.norm();
+            let t = db.lookup(&v, &Vec3::zeros());
+            let r = db.lookup(&Vec3::zeros(), &v);
+            for p in 0..POINTS {
+                assert_eq!(t[p], field(p, &d, MotionKind::Translation) * speed);
+                assert_eq!(r[p], field(p, &d, MotionKind::Rotation) * speed);
+            }
+        }
+    }
+    // Off the samples: linear in each speed, and translation plus rotation is the sum.
+    let (v, w) = (Vec3::new(0.3, -0.7, 0.2), Vec3::new(-0.1, 0.4, 0.9));
+    let both = db.lookup(&v, &w);
+    let t1 = db.lookup(&v, &Vec3::zeros());
+    let t3 = db.lookup(&(v * 3.0), &Vec3::zeros());
+    let r1 = db.lookup(&Vec3::zeros(), &w);
+    for p in 0..POINTS {
+        assert!((t3[p] - t1[p] * 3.0).norm() <= 1e-12 * t3[p].norm());
+        assert!((both[p] - t1[p] - r1[p]).norm() <= 1e-12 * both[p].norm());
+    }
+    assert!(db
+        .lookup(&Vec3::zeros(), &Vec3::zeros())
+        .iter()
+        .all(|w| *w == Vec3::zeros()));
+}
+
+/// Marching the azimuth once around a ring, consecutive lookups differ by no more than the
+/// largest neighbouring-sample difference times the step's share of a sample interval: no jump
+/// at the seam phi = 0 = 2 pi.
+#[test]
+fn lookup_is_continuous_across_the_azimuth_seam() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = sampling();
+    let data = synthetic(s);
+    let db = AblDatabase::open(&written(tmp.path(), &data), None).expect("opens");
+    let table = &data.translation;
+    let theta = 1.234; // between rings 3 and 4
+    let max_neighbour = |p: usize| -> Real {
+        let mut m: Real = 0.0;
+        for i in 3..=4 {
+            for j in 0..s.azimuth {
+                let a = table.row(s.row(i, j), POINTS);
+                let b = table.row(s.row(i, (j + 1) % s.azimuth), POINTS);
+                m = m.max(
+                    (Vec3::from_column_slice(&a[3 * p..3 * p + 3])
+                        - Vec3::from_column_slice(&b[3 * p..3 * p + 3]))
+                    .norm(),
+                );
+            }
+        }
+        m
+    };
+    let steps = 2000;
+    let dphi = 2.0 * std::f64::consts::PI / steps as Real;
+    let share = dphi / (2.0 * std::f64::consts::PI / s.azimuth as Real);
+    let mut prev = db.lookup(&dir(theta, -0.5 * dphi), &Vec3::zeros());
+    for k in 0..=steps {
+        let cur = db.lookup(&dir(theta, (k as Real + 0.5) * dphi), &Vec3::zeros());
+        for p in 0..POINTS {
+            let jump = (cur[p] - prev[p]).norm();
+            assert!(
+                jump <= max_neighbour(p) * share * (1.0 + 1e-6) + 1e-12,
+                "step {k}, point {p}: jump {jump:.3e}"
+            );
+        }
+        prev = cur;
+    }
+}
+
+/// Approaching either pole along any azimuth, the lookup tends to the pole's value, within the
+/// distance's share of a polar interval times the ring-to-pole difference.
+#[test]
+fn lookup_is_continuous_at_the_poles() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = sampling();
+    let data = synthetic(s);
+    let db = AblDatabase::open(&written(tmp.path(), &data), None).expect("opens");
+    let dtheta = std::f64::consts::PI / (s.polar - 1) as Real;
+    for (pole, ring, theta0, sign) in [(0, 1, 0.0, 1.0), (9, 8, std::f64::consts::PI, -1.0)] {
+        let pole_value = db.lookup(&Vec3::zeros(), &s.direction(pole, 0));
+        let ring_diff = |p: usize| -> Real {
+            (0..s.azimuth)
+                .map(|j| {
+                    let r = data.rotation.row(s.row(ring, j), POINTS);
+                    (Vec3::from_column_slice(&r[3 * p..3 * p + 3]) - pole_value[p]).norm()
+                })
+                .fold(0.0, Real::max)
+        };
+        for eps in [1e-3, 1e-6] {
+            for phi in [0.0, 0.1, 1.0, 3.0, 5.5, 6.2] {
+                let v = db.lookup(&Vec3::zeros(), &dir(theta0 + sign * eps, phi));
+                for p in 0..POINTS {
+                    let gap = (v[p] - pole_value[p]).norm();
+                    assert!(gap <= ring_diff(p) * eps / dtheta * (1.0 + 1e-6) + 1e-12);
+                }
+            }
+        }
+    }
+}
+
+/// In the world frame the velocities are taken into the object's frame and omega comes back
+/// rotated: turning the object and the velocity together turns omega with them.
+#[test]
+fn world_lookup_follows_the_pose() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let db = AblDatabase::open(&written(tmp.path(), &synthetic(sampling())), None).expect("opens");
+    let (v, w) = (Vec3::new(0.3, -0.7, 0.2), Vec3::new(-0.1, 0.4, 0.9));
+    let rot = UnitQuaternion::from_scaled_axis(Vec3::new(0.4, -1.1, 0.7));
+    let pose = Isometry3::from_parts(Translation3::new(5.0, 1.0, -2.0), rot);
+    let local = db.lookup(&v, &w);
+    let world = db.lookup_world(&pose, &(rot * v), &(rot * w));
+    for (l, g) in local.iter().zip(&world) {
+        assert!((rot * l - g).norm() <= 1e-12 * l.norm().max(1.0));
+    }
+}
+
+fn open_err(path: &Path, obstacle: Option<&Shape>) -> (AblError, String) {
+    let e = AblDatabase::open(path, obstacle).expect_err("must be refused");
+    let msg = e.to_string();
+    (e, msg)
+}
+
+#[test]
+fn wrong_obstacle_missing_direction_truncated_and_foreign_files_are_refused() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = Sampling::new(4, 6).expect("valid");
+    let mut data = synthetic(s);
+    let path = written(tmp.path(), &data);
+
+    let (e, msg) = open_err(&path, Some(&Shape::Sphere { radius: 0.6 }));
+    assert!(matches!(e, AblError::WrongObstacle { .. }), "{msg}");
+    assert!(msg.contains("'sphere'") && msg.contains("db.h5"), "{msg}");
+
+    data.rotation.complete[s.row(2, 4)] = false;
+    data.write(&path).expect("writes");
+    let (e, msg) = open_err(&path, None);
+    assert!(matches!(e, AblError::Incomplete { count: 1, .. }), "{msg}");
+    assert!(
+        msg.contains("rotation") && msg.contains("polar 2, azimuth 4"),
+        "{msg}"
+    );
+
+    data.rotation.complete[s.row(2, 4)] = true;
+    data.write(&path).expect("writes");
+    let bytes = std::fs::read(&path).expect("reads");
+    let cut = tmp.path().join("cut.h5");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).expect("writes");
+    let (e, msg) = open_err(&cut, None);
+    assert!(matches!(e, AblError::Unreadable { .. }), "{msg}");
+    assert!(msg.contains("truncated") && msg.contains("cut.h5"), "{msg}");
+
+    let text = tmp.path().join("notes.h5");
+    std::fs::write(&text, "not hdf5").expect("writes");
+    assert!(matches!(
+        open_err(&text, None).0,
+        AblError::Unreadable { .. }
+    ));
+
+    let foreign = tmp.path().join("frames.h5");
+    let f = hdf5::File::create(&foreign).expect("creates");
+    f.new_attr::<i64>().shape(()).create("steps").expect("attr");
+    f.close().expect("closes");
+    let (e, msg) = open_err(&foreign, None);
+    assert!(matches!(e, AblError::Foreign { .. }), "{msg}");
+
+    let f = hdf5::File::open_rw(&path).expect("opens");
+    f.delete_attr("format_version").expect("deletes");
+    let a = f
+        .new_attr::<i64>()
+        .shape(())
+        .create("format_version")
+        .expect("attr");
+    a.as_writer().write_scalar(&99i64).expect("writes");
+    f.close().expect("closes");
+    let (e, msg) = open_err(&path, None);
+    assert!(matches!(e, AblError::Version { found: 99, .. }), "{msg}");
+
+    let f = hdf5::File::open_rw(&path).expect("opens");
+    f.delete_attr("format_version").expect("deletes");
+    let a = f
+        .new_attr::<i64>()
+        .shape(())
+        .create("format_version")
+        .expect("attr");
+    a.as_writer()
+        .write_scalar(&ABL_FORMAT_VERSION)
+        .expect("writes");
+    f.unlink("rotation/omega").expect("unlinks");
+    let g = f.group("rotation").expect("group");
+    g.new_dataset::<f64>()
+        .shape([24, POINTS, 2])
+        .create("omega")
+        .expect("dataset");
+    f.close().expect("closes");
+    let (e, msg) = open_err(&path, None);
+    assert!(matches!(e, AblError::Corrupt { .. }), "{msg}");
+    assert!(msg.contains("/rotation/dataset omega has shape"), "{msg}");
+}

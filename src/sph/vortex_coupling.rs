@@ -1,0 +1,73 @@
+//! The SPH fluid as the vortex layer's velocity source (kernel interpolation over the
+//! particles near a point) and sink (the fluid particles' velocities, vorticity by the shared
+//! difference curl). Both read the neighbour grid of the last neighbourhood update.
+
+use super::solver::SphSolver;
+use crate::vortex::{Mat3, SinkField, SinkLayout, VelocitySink, VelocitySource, VortexError};
+use crate::Vec3;
+
+impl SphSolver {
+    /// Calls `f(V_j, v_j, x - x_j)` for every fluid particle j within the kernel support of `x`.
+    fn near_point(&self, x: &Vec3, mut f: impl FnMut(crate::Real, Vec3, Vec3)) {
+        let fluid = &self.fluid;
+        self.grid()
+            .for_each_near(x, &fluid.x, self.kernel.support(), |j| {
+                f(fluid.mass / fluid.density[j], fluid.v[j], x - fluid.x[j])
+            });
+    }
+}
+
+impl VelocitySource for SphSolver {
+    /// Shepard-normalised kernel interpolation, sum V_j v_j W / sum V_j W (zero far from the
+    /// fluid).
+    fn velocity(&self, x: &Vec3) -> Vec3 {
+        let (mut num, mut den) = (Vec3::zeros(), 0.0);
+        self.near_point(x, |vol, v, d| {
+            let w = vol * self.kernel.w(d.norm());
+            num += w * v;
+            den += w;
+        });
+        if den > 0.0 {
+            num / den
+        } else {
+            Vec3::zeros()
+        }
+    }
+
+    /// The difference-form gradient at a point, sum V_j (v_j - v(x)) (x) grad W(x - x_j).
+    fn velocity_gradient(&self, x: &Vec3) -> Mat3 {
+        let vx = self.velocity(x);
+        let mut g = Mat3::zeros();
+        self.near_point(x, |vol, v, d| {
+            g += (vol * (v - vx)) * self.kernel.grad(&d).transpose()
+        });
+        g
+    }
+}
+
+impl VelocitySink for SphSolver {
+    fn layout(&self) -> SinkLayout<'_> {
+        SinkLayout::Points(&self.fluid.x)
+    }
+
+    fn vorticity(&self) -> Vec<Vec3> {
+        SphSolver::vorticity(self)
+    }
+
+    fn add_velocity(&mut self, field: &SinkField) -> Result<(), VortexError> {
+        let SinkField::Points(dv) = field else {
+            return Err(VortexError::Layout(
+                "SPH particles take point velocities".into(),
+            ));
+        };
+        if dv.len() != self.fluid.v.len() {
+            return Err(VortexError::Layout(format!(
+                "{} velocities for {} fluid particles",
+                dv.len(),
+                self.fluid.v.len()
+            )));
+        }
+        self.fluid.v.iter_mut().zip(dv).for_each(|(v, d)| *v += d);
+        Ok(())
+    }
+}

@@ -190,8 +190,9 @@ fn lattice_sums(
 ) -> Vec<Sums> {
     let fine = lattice.refined(upsample);
     let r_max = kernel::radius(max_sigma(particles));
+    let reach_max = kernel::velocity_radius(max_sigma(particles));
     let image_x: Vec<Vec3> = images.iter().map(|m| m.x).collect();
-    let hash = PointHash::new(&image_x, 2.0 * r_max);
+    let hash = PointHash::new(&image_x, r_max + reach_max);
     (0..particles.len())
         .into_par_iter()
         .map(|p| {
@@ -199,9 +200,9 @@ fn lattice_sums(
             let rp = kernel::radius(sp);
             let ap = axis(&particles.omega[p]);
             let mut near = Vec::new();
-            hash.for_each_near(&xp, rp + r_max, |m| {
+            hash.for_each_near(&xp, rp + reach_max, |m| {
                 let q = images[m].particle;
-                if (xp - images[m].x).norm() < rp + kernel::radius(particles.sigma[q]) {
+                if (xp - images[m].x).norm() < rp + kernel::velocity_radius(particles.sigma[q]) {
                     near.push((images[m].x, particles.omega[q], particles.sigma[q]));
                 }
             });
@@ -221,7 +222,7 @@ fn lattice_sums(
                         }
                         let desired: Vec3 = near
                             .iter()
-                            .filter(|(xq, _, sq)| (c - xq).norm() < kernel::radius(*sq))
+                            .filter(|(xq, _, sq)| (c - xq).norm() < kernel::velocity_radius(*sq))
                             .map(|(xq, wq, sq)| kernel::vorticity(wq, *sq, &(c - xq)))
                             .sum();
                         let wrapped: [i64; 3] =
@@ -378,7 +379,7 @@ fn point_sums(
     points: &[Vec3],
     vorticity: &[Vec3],
 ) -> Vec<Sums> {
-    let reach = max_sigma(particles) * kernel::CUTOFF;
+    let reach = kernel::velocity_radius(max_sigma(particles));
     let n = particles.len();
     points
         .par_iter()
@@ -388,7 +389,7 @@ fn point_sums(
             |(mut sums, mut near), (x, have)| {
                 near.clear();
                 hash.for_each_near(x, reach, |q| {
-                    if (x - particles.x[q]).norm() < particles.radius(q) {
+                    if (x - particles.x[q]).norm() < kernel::velocity_radius(particles.sigma[q]) {
                         near.push(q);
                     }
                 });
@@ -403,6 +404,9 @@ fn point_sums(
                     })
                     .sum();
                 for &q in &near {
+                    if (x - particles.x[q]).norm() >= particles.radius(q) {
+                        continue;
+                    }
                     let a = axis(&particles.omega[q]);
                     let d = desired.dot(&a);
                     let s = &mut sums[q];
@@ -442,7 +446,7 @@ fn point_velocity(
             hash.for_each_near(x, reach, |q| {
                 let d = x - particles.x[q];
                 let s = particles.sigma[q];
-                if weights[q] != 0.0 && d.norm() < kernel::velocity_radius(s) {
+                if weights[q] != 0.0 && d.norm_squared() < kernel::velocity_radius(s).powi(2) {
                     v += kernel::velocity(&(particles.omega[q] * weights[q]), s, &d);
                 }
             });

@@ -55,7 +55,7 @@ impl VelocitySink for MacGrid {
                 "a MAC grid takes face velocities".into(),
             ));
         };
-        for (u, du) in self.u.iter_mut().zip(faces) {
+        for (u, du) in self.u.iter_mut().zip(faces.iter()) {
             if u.shape() != du.shape() {
                 return Err(VortexError::Layout(format!(
                     "face array of shape {:?} for faces of shape {:?}",

@@ -50,10 +50,10 @@ impl DynamicsSettings {
     /// Checks the ranges.
     pub fn validate(&self) -> Result<(), VortexError> {
         let bad = |what: &str| Err(VortexError::InvalidSettings(what.into()));
-        if !(self.dissipation_cells >= 0.0) {
+        if self.dissipation_cells.is_nan() || self.dissipation_cells < 0.0 {
             return bad("dissipation_cells must be >= 0");
         }
-        if !(self.inertial_radius >= 0.0) {
+        if self.inertial_radius.is_nan() || self.inertial_radius < 0.0 {
             return bad("inertial_radius must be >= 0");
         }
         if self.children < 2 {
@@ -119,12 +119,12 @@ pub fn split(p: &mut VortexParticles, s: &DynamicsSettings, rng: &mut ChaCha8Rng
     let n = s.children as Real;
     let mut keep = vec![true; p.len()];
     let mut born = VortexParticles::new();
-    for i in 0..p.len() {
+    for (i, kept) in keep.iter_mut().enumerate() {
         let sigma = p.sigma[i];
         if kernel::radius(sigma) > s.inertial_radius || p.age[i] < s.split_time(sigma) {
             continue;
         }
-        keep[i] = false;
+        *kept = false;
         let child = sigma * s.child_scale;
         // E_b = E_a (sigma_b/sigma_a)^(5/3) / n with E ~ omega^2 sigma^5.
         let strength = p.omega[i].norm() * s.child_scale.powf(-5.0 / 3.0) / n.sqrt();

@@ -72,7 +72,7 @@ pub enum SinkLayout<'a> {
 #[derive(Debug, Clone)]
 pub enum SinkField {
     /// Face components, `faces[a]` of shape dims + e_a (the MAC layout).
-    Faces([Array3<Real>; 3]),
+    Faces(Box<[Array3<Real>; 3]>),
     /// One vector per point.
     Points(Vec<Vec3>),
 }

@@ -64,7 +64,7 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
             let sums = lattice_sums(particles, &images, &lattice, upsample, &vorticity);
             let report = weights(particles, &sums);
             let faces = lattice_velocity(particles, &images, &report.weights, &lattice, upsample);
-            (SinkField::Faces(faces), report)
+            (SinkField::Faces(Box::new(faces)), report)
         }
         SinkLayout::Points(points) => {
             if vorticity.len() != points.len() {

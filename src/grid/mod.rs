@@ -22,6 +22,7 @@ pub mod solver;
 mod stencil;
 mod transfer;
 pub mod viscosity;
+pub mod vortex_coupling;
 
 pub use average::RunningAverage;
 pub use boundary::Boundaries;

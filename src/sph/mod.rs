@@ -11,6 +11,7 @@ pub mod neighborhood;
 pub mod neighbors;
 pub mod operators;
 pub mod solver;
+pub mod vortex_coupling;
 
 pub use kernel::CubicSpline;
 pub use neighborhood::Neighborhood;

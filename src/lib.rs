@@ -15,6 +15,7 @@ pub mod refine;
 pub mod run;
 pub mod scene;
 pub mod sph;
+pub mod stepping;
 pub mod vortex;
 
 /// The one floating-point type of eddy (f64 throughout, see DESIGN.md "Conventions").

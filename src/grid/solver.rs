@@ -343,7 +343,7 @@ impl GridSolver {
                 ),
             });
         }
-        Ok(limit.map_or(dt, |l| dt.min(l.max(s.dt_min))))
+        Ok(limit.map_or(dt, |l| crate::stepping::towards_end(dt, l)))
     }
 
     /// Buoyancy and vorticity confinement, and the smoke sources.

@@ -62,7 +62,7 @@ pub struct Stepping {
     pub dt_min: Real,
     pub dt_max: Real,
     pub fixed_dt: Option<Real>,
-    /// The run's end time: the last step is shortened to land on it (never below `dt_min`).
+    /// The run's end time: the last steps are shortened to land on it.
     pub end: Option<Real>,
 }
 
@@ -97,6 +97,8 @@ pub struct SphSolver {
     factor: Vec<Real>,
     time: Real,
     step: u64,
+    /// The last step's size; the stored stiffnesses (kappa dt^2) are rescaled when dt changes.
+    last_dt: Option<Real>,
     /// The turbulence refinement, if the scene has one.
     refiner: Option<Box<dyn Refiner>>,
     /// Boundary samples take part in the difference operators (`refinement.walls`).
@@ -159,6 +161,7 @@ impl SphSolver {
             factor: vec![0.0; n],
             time: 0.0,
             step: 0,
+            last_dt: None,
             refiner: refine::build(&scene.refinement, n, scene.seed),
             walls_in_operators: scene.refinement.walls(),
         };
@@ -277,11 +280,20 @@ impl SphSolver {
                     speed,
                 }
             })?;
-        let dt = match self.stepping.end {
-            Some(end) if end - self.time < dt => (end - self.time).max(self.stepping.dt_min),
-            _ => dt,
-        };
+        let dt = self
+            .stepping
+            .end
+            .map_or(dt, |end| crate::stepping::towards_end(dt, end - self.time));
         stats.dt = dt;
+        // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
+        // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
+        // before the end time are up to halved), so carry kappa over.
+        if let Some(last) = self.last_dt.filter(|&last| last != dt) {
+            let scale = (dt / last).powi(2);
+            kappa.par_iter_mut().for_each(|k| *k *= scale);
+            kappa_v.par_iter_mut().for_each(|k| *k *= scale);
+        }
+        self.last_dt = Some(dt);
         if dfsph && settings.divergence_solver {
             stats.divergence = dfsph::solve(
                 &nb,

@@ -2,6 +2,7 @@
 //! incompressibility with obstacles and open sides, solid boundary conditions, Taylor–Green
 //! decay and its convergence order, scalar advection in a rotating field, bad input.
 
+use eddy::grid::bench::TaylorGreen;
 use eddy::grid::{advect::advect, GridError, GridSolver, MacGrid};
 use eddy::run::{bodies, RunError, RunOptions};
 use eddy::scene::{self, Advection, Scene};
@@ -13,52 +14,26 @@ fn scene_from(text: &str) -> Scene {
     scene::parse_str(text, Path::new("test.toml"), &[]).expect("test scene is valid")
 }
 
-/// The 2-D Taylor–Green vortex on [0, 2 pi]^2, one cell thick and periodic in every axis.
-fn taylor_green(n: usize, advection: &str, nu: Real, cfl: Real, reflection: bool) -> GridSolver {
-    let dx = 2.0 * PI / n as Real;
-    let s = scene_from(&format!(
-        r#"
-        name = "taylor_green"
-        gravity = [0.0, 0.0, 0.0]
-        domain = {{ min = [0.0, 0.0, 0.0], max = [{l}, {l}, {dx}] }}
-        time = {{ end = 1.0, cfl = {cfl}, dt_max = 1.0 }}
-        viscosity = {{ kinematic = {nu} }}
-        [grid]
-        resolution = [{n}, {n}, 1]
-        advection = "{advection}"
-        reflection = {reflection}
-        viscosity_scheme = "crank_nicolson"
-        pressure_tolerance = 1e-10
-        boundary = {{ x_min = "periodic", x_max = "periodic", y_min = "periodic", y_max = "periodic", z_min = "periodic", z_max = "periodic" }}
-        "#,
-        l = 2.0 * PI,
-    ));
-    let mut g = GridSolver::new(&s, vec![]).expect("grid builds");
-    g.set_velocity(|x| Vec3::new(x.x.sin() * x.y.cos(), -x.x.cos() * x.y.sin(), 0.0))
-        .expect("projects");
-    g
-}
-
-/// Largest deviation of the kinetic energy from E0 exp(-4 nu t) up to t_end, as
-/// |ln(E / E_exact)|: the error of the decay exponent, which a first-order numerical viscosity
-/// makes proportional to dx (the relative error saturates below 1 and hides the order).
+/// The largest |ln(E / E_exact)| of a Taylor–Green run (see `TaylorGreen::energy_error`).
 fn tg_energy_error(
     n: usize,
     advection: &str,
     nu: Real,
     cfl: Real,
     reflection: bool,
-    t_end: Real,
+    end: Real,
 ) -> Real {
-    let mut g = taylor_green(n, advection, nu, cfl, reflection);
-    let e0 = g.kinetic_energy();
-    let mut worst: Real = 0.0;
-    while g.time() < t_end - 1e-12 {
-        g.advance(Some(t_end - g.time())).expect("stable");
-        let exact = e0 * (-4.0 * nu * g.time()).exp();
-        worst = worst.max((g.kinetic_energy() / exact).ln().abs());
+    TaylorGreen {
+        cells: n,
+        advection,
+        reflection,
+        nu,
+        cfl,
+        end,
     }
-    worst
+    .energy_error()
+    .expect("stable")
+    .0
 }
 
 /// Observed order of convergence between two errors at a refinement by 2.

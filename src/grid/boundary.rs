@@ -6,7 +6,7 @@
 use ndarray::{s, Array3, Axis, Zip};
 
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
-use super::mac::MacGrid;
+use super::mac::{cells_beside_face, MacGrid};
 use super::poisson::{Boundary, CellKind, Side};
 use crate::geometry::RigidBody;
 use crate::scene::GridSide;
@@ -161,22 +161,14 @@ impl Boundaries {
                 .and(&mut self.fixed_value[a])
                 .par_for_each(|(i, j, k), fixed, value| {
                     let idx = [i, j, k];
-                    let face = idx[a];
                     let cell_at = |c: usize| {
                         let mut cell = idx;
                         cell[a] = c;
                         owner[cell]
                     };
                     // The cells on either side; None beyond a non-periodic side.
-                    let (left, right) = if periodic {
-                        let l = (face + n - 1) % n;
-                        (Some(cell_at(l)), Some(cell_at(face % n)))
-                    } else {
-                        (
-                            (face > 0).then(|| cell_at(face - 1)),
-                            (face < n).then(|| cell_at(face)),
-                        )
-                    };
+                    let (left, right) = cells_beside_face(idx[a], n, periodic);
+                    let (left, right) = (left.map(cell_at), right.map(cell_at));
                     let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
                     let prescribed = if let Some(body) = solid {
                         let x = Point3::from(grid.face_center(a, idx));

@@ -3,7 +3,7 @@
 
 use ndarray::{Array3, Zip};
 
-use super::mac::MacGrid;
+use super::mac::{cells_beside_face_clamped, MacGrid};
 use crate::{Real, Vec3};
 
 /// Adds dt times a cell-centred acceleration to the faces (the mean of the two cells beside
@@ -22,12 +22,7 @@ pub fn add_cell_acceleration(grid: &mut MacGrid, accel: &[Array3<Real>; 3], dt: 
                 cell[a] = c;
                 f[cell]
             };
-            let face = idx[a];
-            let (l, r) = if periodic[a] {
-                ((face + n - 1) % n, face % n)
-            } else {
-                (face.saturating_sub(1), face.min(n - 1))
-            };
+            let (l, r) = cells_beside_face_clamped(idx[a], n, periodic[a]);
             *u += dt * 0.5 * (at(l) + at(r));
         });
     }

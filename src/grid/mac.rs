@@ -100,13 +100,8 @@ impl MacGrid {
     #[inline]
     pub fn velocity_at_sample(&self, face_axis: Option<usize>, idx: [usize; 3]) -> Vec3 {
         let beside = |a: usize| {
-            let (n, face) = (self.dims[a], idx[a]);
             let (mut l, mut r) = (idx, idx);
-            if self.periodic[a] {
-                (l[a], r[a]) = ((face + n - 1) % n, face % n);
-            } else {
-                (l[a], r[a]) = (face.saturating_sub(1), face.min(n - 1));
-            }
+            (l[a], r[a]) = cells_beside_face_clamped(idx[a], self.dims[a], self.periodic[a]);
             (l, r)
         };
         let faces_mean = |b: usize, cell: [usize; 3]| {
@@ -208,5 +203,26 @@ impl MacGrid {
                 .sum();
         });
         out
+    }
+}
+
+/// The cells on either side of face `face` along an axis of `n` cells: wrapped on a periodic
+/// axis, None beyond the ends of another.
+#[inline]
+pub fn cells_beside_face(face: usize, n: usize, periodic: bool) -> (Option<usize>, Option<usize>) {
+    if periodic {
+        (Some((face + n - 1) % n), Some(face % n))
+    } else {
+        ((face > 0).then(|| face - 1), (face < n).then_some(face))
+    }
+}
+
+/// As [`cells_beside_face`], with the one cell standing for both at a non-periodic end.
+#[inline]
+pub fn cells_beside_face_clamped(face: usize, n: usize, periodic: bool) -> (usize, usize) {
+    match cells_beside_face(face, n, periodic) {
+        (Some(l), Some(r)) => (l, r),
+        (Some(c), None) | (None, Some(c)) => (c, c),
+        (None, None) => unreachable!("an axis has at least one cell"),
     }
 }

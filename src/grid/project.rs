@@ -7,7 +7,7 @@
 use ndarray::{Array3, Zip};
 
 use super::boundary::Boundaries;
-use super::mac::MacGrid;
+use super::mac::{cells_beside_face, MacGrid};
 use super::poisson::{PoissonSystem, SolveError, SolveStats, SolverSettings};
 use crate::Real;
 
@@ -46,16 +46,8 @@ fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) 
                     cell[a] = c;
                     y[cell]
                 };
-                let face = idx[a];
-                let (left, right) = if periodic[a] {
-                    (at((face + n - 1) % n), at(face % n))
-                } else {
-                    (
-                        if face > 0 { at(face - 1) } else { 0.0 },
-                        if face < n { at(face) } else { 0.0 },
-                    )
-                };
-                *u -= right - left;
+                let (left, right) = cells_beside_face(idx[a], n, periodic[a]);
+                *u -= right.map_or(0.0, at) - left.map_or(0.0, at);
             });
     }
 }

@@ -358,3 +358,39 @@ fn velocity_at_samples_matches_interpolation() {
         check(Some(a), mac.face_stagger(a).shape);
     }
 }
+
+/// Faces inside a static obstacle take the mean of their known neighbours, one layer per pass
+/// from the fluid inwards, and `apply` restores the prescribed values afterwards.
+#[test]
+fn velocity_is_extrapolated_into_static_obstacles_and_restored() {
+    let s = scene_from(
+        r#"
+        name = "block"
+        gravity = [0.0, 0.0, 0.0]
+        domain = { min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }
+        time = { end = 1.0 }
+        [grid]
+        resolution = [10, 10, 10]
+        [[obstacles]]
+        name = "block"
+        shape = { type = "box", half_extents = [0.3, 0.3, 0.3] }
+        position = [0.5, 0.5, 0.5]
+        "#,
+    );
+    let mut g = GridSolver::new(&s, bodies(&s).expect("bodies")).expect("grid builds");
+    for u in g.mac.u.iter_mut() {
+        u.fill(2.0);
+    }
+    g.bounds.apply(&mut g.mac);
+    // Cells 2..8 are solid; x-faces 3..8 have solid on both sides.
+    assert_eq!(g.mac.u[0][[3, 5, 5]], 0.0);
+    g.bounds.extrapolate_into_obstacles(&mut g.mac, 2);
+    let u = &g.mac.u[0];
+    // Face (3, 2, 5): inside (cells (2,2,5), (3,2,5) solid), next to fluid-side faces at y = 1.
+    assert!(u[[3, 2, 5]] > 0.0, "first layer filled: {}", u[[3, 2, 5]]);
+    // Two layers deep from every side the centre stays untouched.
+    assert_eq!(u[[5, 5, 5]], 0.0);
+    g.bounds.apply(&mut g.mac);
+    assert_eq!(g.mac.u[0][[3, 2, 5]], 0.0);
+    assert_eq!(g.mac.u[0][[3, 5, 5]], 0.0);
+}

@@ -26,6 +26,9 @@ pub struct Boundaries {
     pub fixed: [Array3<bool>; 3],
     /// The prescribed velocity of fixed faces (0 elsewhere), per component.
     pub fixed_value: [Array3<Real>; 3],
+    /// Faces with a static obstacle cell on both sides: their values only ever enter
+    /// interpolation, so advection reads velocity extrapolated from the fluid there.
+    inside: [Array3<bool>; 3],
 }
 
 impl Boundaries {
@@ -37,6 +40,7 @@ impl Boundaries {
             owner,
             fixed: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
             fixed_value: std::array::from_fn(|a| Array3::zeros(grid.u[a].raw_dim())),
+            inside: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
         };
         b.classify_faces(grid, bodies, t);
         b
@@ -149,6 +153,64 @@ impl Boundaries {
         grid.sync_periodic();
     }
 
+    /// Replaces the velocity on faces inside static obstacles by the mean of their neighbours
+    /// in the same component, layer by layer from the fluid inwards (`layers` deep), so that
+    /// interpolation near a wall reads fluid velocity rather than the obstacle's zero: without
+    /// it advection drags the flow along every wall, an artificial no-slip. [`Self::apply`]
+    /// puts the prescribed values back before the solves.
+    pub fn extrapolate_into_obstacles(&self, grid: &mut MacGrid, layers: usize) {
+        for a in 0..3 {
+            let inside = &self.inside[a];
+            if !inside.iter().any(|&i| i) {
+                continue;
+            }
+            let mut known = inside.mapv(|i| !i);
+            let shape = known.raw_dim();
+            let mut todo: Vec<[usize; 3]> = inside
+                .indexed_iter()
+                .filter(|(_, &i)| i)
+                .map(|((i, j, k), _)| [i, j, k])
+                .collect();
+            for _ in 0..layers {
+                let u = &grid.u[a];
+                let mut next: Vec<([usize; 3], Real)> = Vec::new();
+                for &[i, j, k] in &todo {
+                    let (mut sum, mut count) = (0.0, 0);
+                    for b in 0..3 {
+                        for up in [false, true] {
+                            let mut n = [i, j, k];
+                            if up {
+                                n[b] += 1;
+                                if n[b] >= shape[b] {
+                                    continue;
+                                }
+                            } else if n[b] == 0 {
+                                continue;
+                            } else {
+                                n[b] -= 1;
+                            }
+                            if known[n] {
+                                sum += u[n];
+                                count += 1;
+                            }
+                        }
+                    }
+                    if count > 0 {
+                        next.push(([i, j, k], sum / count as Real));
+                    }
+                }
+                if next.is_empty() {
+                    break;
+                }
+                for &(idx, v) in &next {
+                    grid.u[a][idx] = v;
+                    known[idx] = true;
+                }
+                todo.retain(|&idx| !known[idx]);
+            }
+        }
+    }
+
     /// Marks the fixed faces of every component and their velocities.
     fn classify_faces(&mut self, grid: &MacGrid, bodies: &[RigidBody], t: Real) {
         let dims = grid.dims;
@@ -159,7 +221,8 @@ impl Boundaries {
             let owner = &self.owner;
             Zip::indexed(&mut self.fixed[a])
                 .and(&mut self.fixed_value[a])
-                .par_for_each(|(i, j, k), fixed, value| {
+                .and(&mut self.inside[a])
+                .par_for_each(|(i, j, k), fixed, value, inside| {
                     let idx = [i, j, k];
                     let cell_at = |c: usize| {
                         let mut cell = idx;
@@ -170,6 +233,12 @@ impl Boundaries {
                     let (left, right) = cells_beside_face(idx[a], n, periodic);
                     let (left, right) = (left.map(cell_at), right.map(cell_at));
                     let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
+                    *inside = match (left, right) {
+                        (Some(l), Some(r)) => {
+                            l != FLUID && r != FLUID && !bodies[l as usize].is_moving()
+                        }
+                        _ => false,
+                    };
                     let prescribed = if let Some(body) = solid {
                         let x = Point3::from(grid.face_center(a, idx));
                         Some(bodies[body as usize].velocity_at(t, &x)[a])

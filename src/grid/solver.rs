@@ -18,6 +18,10 @@ use crate::geometry::{GeometryError, RigidBody};
 use crate::scene::{Advection, Body, Grid, Motion, Scene, SmokeSource, ViscosityScheme};
 use crate::{Point3, Real, Vec3};
 
+/// Face layers inside static obstacles that advection sees extrapolated fluid velocity on:
+/// two cover the trilinear stencil of a departure point up to a cell inside a wall.
+const EXTRAPOLATION_LAYERS: usize = 2;
+
 /// Largest CFL number (u_max dt / dx) a step may reach before the run is called unstable.
 const CFL_BLOWUP: Real = 50.0;
 
@@ -231,6 +235,8 @@ impl GridSolver {
 
         let t0 = Instant::now();
         let scheme = self.settings.advection;
+        self.bounds
+            .extrapolate_into_obstacles(&mut self.mac, EXTRAPOLATION_LAYERS);
         if let Some(smoke) = self.smoke.as_mut() {
             let stagger = self.mac.cell_stagger();
             smoke.density = advect(&smoke.density, stagger, &self.mac, dt, scheme);
@@ -294,7 +300,9 @@ impl GridSolver {
         let t1 = Instant::now();
         let first = self.project(half)?;
         let mut elapsed = t1.elapsed().as_secs_f64();
-        let projected = self.mac.clone();
+        let mut projected = self.mac.clone();
+        self.bounds
+            .extrapolate_into_obstacles(&mut projected, EXTRAPOLATION_LAYERS);
         for (u, tilde) in self.mac.u.iter_mut().zip(&advected) {
             Zip::from(u)
                 .and(tilde)

@@ -80,6 +80,8 @@ struct Settings {
     density: Real,
     confinement: Real,
     up: Vec3,
+    /// Gravity applied as a body force (None: only its direction is used, for buoyancy).
+    gravity: Option<Vec3>,
     cfl: Real,
     dt_min: Real,
     dt_max: Real,
@@ -157,6 +159,7 @@ impl GridSolver {
             viscosity: scene.viscosity.kinematic,
             density: grid.density,
             confinement: grid.vorticity_confinement,
+            gravity: grid.gravity.then_some(g),
             up,
             cfl: scene.time.cfl,
             dt_min: scene.time.dt_min,
@@ -390,6 +393,11 @@ impl GridSolver {
         if self.settings.confinement > 0.0 {
             let f = confinement(&self.mac, self.settings.confinement);
             add_cell_acceleration(&mut self.mac, &f, dt);
+        }
+        if let Some(g) = self.settings.gravity {
+            for (u, ga) in self.mac.u.iter_mut().zip(g.iter()) {
+                u.par_mapv_inplace(|v| v + dt * ga);
+            }
         }
     }
 

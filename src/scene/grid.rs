@@ -46,6 +46,12 @@ pub struct Grid {
     /// Most pressure iterations per step; a solve that hits it stops the run.
     #[serde(default = "default_pressure_max_iterations")]
     pub pressure_max_iterations: u32,
+    /// Apply the scene's gravity as a body force. In one incompressible fluid it is balanced by
+    /// a hydrostatic pressure gradient and moves nothing; it shows in the pressure and in the
+    /// force probes (buoyancy of obstacles). Off by default: smoke rises by `grid.smoke`
+    /// buoyancy along gravity's direction either way.
+    #[serde(default)]
+    pub gravity: bool,
     /// Vorticity confinement strength epsilon (Fedkiw et al. 2001), dimensionless; 0 is off.
     #[serde(default)]
     pub vorticity_confinement: Real,

@@ -180,6 +180,62 @@ fn index_range(c: Real, reach: Real, offset: Real, len: usize, wrap: bool) -> (i
     }
 }
 
+/// The desired vorticity omega_D at the cells of the synthesis lattice `fine`: every particle
+/// image adds its kernel vorticity to the cells within its velocity reach. Built once, in
+/// parallel over slabs of x-planes with the images binned per slab, so the Eq. 14 sums read it
+/// instead of re-summing the neighbouring kernels at every cell of every particle.
+fn desired_field(particles: &VortexParticles, images: &[Image], fine: &Lattice) -> Vec<Vec3> {
+    let [nx, ny, nz] = fine.dims;
+    let ranges: Vec<[(i64, i64); 3]> = images
+        .iter()
+        .map(|m| {
+            let g = (m.x - fine.origin) / fine.dx;
+            let reach = kernel::velocity_radius(particles.sigma[m.particle]) / fine.dx;
+            std::array::from_fn(|b| index_range(g[b], reach, 0.5, fine.dims[b], false))
+        })
+        .collect();
+    let chunks = nx.div_ceil(PLANES);
+    let mut bins: Vec<Vec<usize>> = vec![Vec::new(); chunks];
+    for (n, r) in ranges.iter().enumerate() {
+        if r[0].0 <= r[0].1 && r[1].0 <= r[1].1 && r[2].0 <= r[2].1 {
+            for bin in &mut bins[r[0].0 as usize / PLANES..=r[0].1 as usize / PLANES] {
+                bin.push(n);
+            }
+        }
+    }
+    let mut out = vec![Vec3::zeros(); nx * ny * nz];
+    out.par_chunks_mut(PLANES * ny * nz)
+        .zip(bins.par_iter())
+        .enumerate()
+        .for_each(|(chunk, (block, bin))| {
+            let first = (chunk * PLANES) as i64;
+            let last = first + (block.len() / (ny * nz)) as i64 - 1;
+            for &n in bin {
+                let m = &images[n];
+                let q = m.particle;
+                let (wq, sq) = (particles.omega[q], particles.sigma[q]);
+                let reach2 = kernel::velocity_radius(sq).powi(2);
+                let r = ranges[n];
+                for i in r[0].0.max(first)..=r[0].1.min(last) {
+                    for j in r[1].0..=r[1].1 {
+                        for k in r[2].0..=r[2].1 {
+                            let idx = [i, j, k];
+                            let d = fine.origin
+                                + Vec3::from_fn(|b, _| (idx[b] as Real + 0.5) * fine.dx)
+                                - m.x;
+                            if d.norm_squared() < reach2 {
+                                let cell =
+                                    ((i - first) as usize * ny + j as usize) * nz + k as usize;
+                                block[cell] += kernel::vorticity(&wq, sq, &d);
+                            }
+                        }
+                    }
+                }
+            }
+        });
+    out
+}
+
 /// Eq. 14 sums of every particle over the cells of the synthesis lattice under its cut-off.
 fn lattice_sums(
     particles: &VortexParticles,
@@ -189,23 +245,13 @@ fn lattice_sums(
     vorticity: &[Vec3],
 ) -> Vec<Sums> {
     let fine = lattice.refined(upsample);
-    let r_max = kernel::radius(max_sigma(particles));
-    let reach_max = kernel::velocity_radius(max_sigma(particles));
-    let image_x: Vec<Vec3> = images.iter().map(|m| m.x).collect();
-    let hash = PointHash::new(&image_x, r_max + reach_max);
+    let desired_at = desired_field(particles, images, &fine);
     (0..particles.len())
         .into_par_iter()
         .map(|p| {
             let (xp, sp) = (particles.x[p], particles.sigma[p]);
             let rp = kernel::radius(sp);
             let ap = axis(&particles.omega[p]);
-            let mut near = Vec::new();
-            hash.for_each_near(&xp, rp + reach_max, |m| {
-                let q = images[m].particle;
-                if (xp - images[m].x).norm() < rp + kernel::velocity_radius(particles.sigma[q]) {
-                    near.push((images[m].x, particles.omega[q], particles.sigma[q]));
-                }
-            });
             let g = (xp - fine.origin) / fine.dx;
             let range: [(i64, i64); 3] = std::array::from_fn(|a| {
                 index_range(g[a], rp / fine.dx, 0.5, fine.dims[a], fine.periodic[a])
@@ -220,16 +266,12 @@ fn lattice_sums(
                         if (c - xp).norm_squared() >= rp * rp {
                             continue;
                         }
-                        let desired: Vec3 = near
-                            .iter()
-                            .filter(|(xq, _, sq)| (c - xq).norm() < kernel::velocity_radius(*sq))
-                            .map(|(xq, wq, sq)| kernel::vorticity(wq, *sq, &(c - xq)))
-                            .sum();
                         let wrapped: [i64; 3] =
                             std::array::from_fn(|a| idx[a].rem_euclid(fine.dims[a] as i64));
+                        let [wi, wj, wk] = wrapped.map(|v| v as usize);
+                        let desired = desired_at[(wi * fine.dims[1] + wj) * fine.dims[2] + wk];
                         let have = if upsample == 1 {
-                            let [i, j, k] = wrapped.map(|v| v as usize);
-                            vorticity[(i * lattice.dims[1] + j) * lattice.dims[2] + k]
+                            vorticity[(wi * lattice.dims[1] + wj) * lattice.dims[2] + wk]
                         } else {
                             let gc =
                                 Vec3::from_fn(|a, _| (wrapped[a] as Real + 0.5) / upsample as Real);

@@ -231,6 +231,11 @@ fn bad_grid_input_is_reported() {
     assert!(cubic.contains("cubic"), "{cubic}");
     let lone = err("grid.boundary.x_min=\"periodic\"");
     assert!(lone.contains("periodic on both sides"), "{lone}");
+    let refined = err("refinement.method=\"vrsph\"");
+    assert!(
+        refined.contains("refinement.method") && refined.contains("grid scene"),
+        "{refined}"
+    );
 
     let mut s = scene_from(base);
     s.obstacles.push(scene::Body {

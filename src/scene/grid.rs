@@ -407,6 +407,13 @@ impl Scene {
                 }
             }
         }
+        if self.refinement != super::Refinement::None {
+            return Err(c.invalid(
+                "refinement.method",
+                format!("{:?}", self.refinement.method()),
+                "\"none\" in a grid scene (the refinements act on SPH particles)",
+            ));
+        }
         if self.fluid.is_some() {
             return Err(c.invalid(
                 "grid",

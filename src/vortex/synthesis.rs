@@ -194,15 +194,7 @@ fn desired_field(particles: &VortexParticles, images: &[Image], fine: &Lattice) 
             std::array::from_fn(|b| index_range(g[b], reach, 0.5, fine.dims[b], false))
         })
         .collect();
-    let chunks = nx.div_ceil(PLANES);
-    let mut bins: Vec<Vec<usize>> = vec![Vec::new(); chunks];
-    for (n, r) in ranges.iter().enumerate() {
-        if r[0].0 <= r[0].1 && r[1].0 <= r[1].1 && r[2].0 <= r[2].1 {
-            for bin in &mut bins[r[0].0 as usize / PLANES..=r[0].1 as usize / PLANES] {
-                bin.push(n);
-            }
-        }
-    }
+    let bins = slab_bins(&ranges, nx);
     let mut out = vec![Vec3::zeros(); nx * ny * nz];
     out.par_chunks_mut(PLANES * ny * nz)
         .zip(bins.par_iter())
@@ -210,28 +202,16 @@ fn desired_field(particles: &VortexParticles, images: &[Image], fine: &Lattice) 
         .for_each(|(chunk, (block, bin))| {
             let first = (chunk * PLANES) as i64;
             let last = first + (block.len() / (ny * nz)) as i64 - 1;
-            for &n in bin {
+            for_each_in_slab(bin, &ranges, first, last, |n, [i, j, k]| {
                 let m = &images[n];
-                let q = m.particle;
-                let (wq, sq) = (particles.omega[q], particles.sigma[q]);
-                let reach2 = kernel::velocity_radius(sq).powi(2);
-                let r = ranges[n];
-                for i in r[0].0.max(first)..=r[0].1.min(last) {
-                    for j in r[1].0..=r[1].1 {
-                        for k in r[2].0..=r[2].1 {
-                            let idx = [i, j, k];
-                            let d = fine.origin
-                                + Vec3::from_fn(|b, _| (idx[b] as Real + 0.5) * fine.dx)
-                                - m.x;
-                            if d.norm_squared() < reach2 {
-                                let cell =
-                                    ((i - first) as usize * ny + j as usize) * nz + k as usize;
-                                block[cell] += kernel::vorticity(&wq, sq, &d);
-                            }
-                        }
-                    }
+                let (wq, sq) = (particles.omega[m.particle], particles.sigma[m.particle]);
+                let idx = [i, j, k];
+                let d = fine.origin + Vec3::from_fn(|b, _| (idx[b] as Real + 0.5) * fine.dx) - m.x;
+                if d.norm_squared() < kernel::velocity_radius(sq).powi(2) {
+                    let cell = ((i - first) as usize * ny + j as usize) * nz + k as usize;
+                    block[cell] += kernel::vorticity(&wq, sq, &d);
                 }
-            }
+            });
         });
     out
 }
@@ -326,6 +306,41 @@ fn sample_cells(field: &[Vec3], lattice: &Lattice, g: &Vec3) -> Vec3 {
 /// Planes of faces per parallel task.
 const PLANES: usize = 2;
 
+/// For each slab of `PLANES` x-planes of an axis of `len` samples, the index boxes (inclusive
+/// ranges per axis) that touch it; empty boxes are left out.
+fn slab_bins(ranges: &[[(i64, i64); 3]], len: usize) -> Vec<Vec<usize>> {
+    let mut bins: Vec<Vec<usize>> = vec![Vec::new(); len.div_ceil(PLANES)];
+    for (n, r) in ranges.iter().enumerate() {
+        if r[0].0 <= r[0].1 && r[1].0 <= r[1].1 && r[2].0 <= r[2].1 {
+            for bin in &mut bins[r[0].0 as usize / PLANES..=r[0].1 as usize / PLANES] {
+                bin.push(n);
+            }
+        }
+    }
+    bins
+}
+
+/// Calls `f(n, [i, j, k])` for every index of every box `n` in `bin` whose x-index lies in the
+/// slab `first..=last`: each slab is written by one task, so splats need no locks.
+fn for_each_in_slab(
+    bin: &[usize],
+    ranges: &[[(i64, i64); 3]],
+    first: i64,
+    last: i64,
+    mut f: impl FnMut(usize, [i64; 3]),
+) {
+    for &n in bin {
+        let r = ranges[n];
+        for i in r[0].0.max(first)..=r[0].1.min(last) {
+            for j in r[1].0..=r[1].1 {
+                for k in r[2].0..=r[2].1 {
+                    f(n, [i, j, k]);
+                }
+            }
+        }
+    }
+}
+
 /// The weighted kernel velocities on the lattice's faces, each face the mean over
 /// `upsample^2` points spread over it.
 fn lattice_velocity(
@@ -359,15 +374,7 @@ fn lattice_velocity(
                 })
             })
             .collect();
-        let chunks = shape[0].div_ceil(PLANES);
-        let mut bins: Vec<Vec<usize>> = vec![Vec::new(); chunks];
-        for (n, r) in ranges.iter().enumerate() {
-            if r[0].0 <= r[0].1 && r[1].0 <= r[1].1 && r[2].0 <= r[2].1 {
-                for bin in &mut bins[r[0].0 as usize / PLANES..=r[0].1 as usize / PLANES] {
-                    bin.push(n);
-                }
-            }
-        }
+        let bins = slab_bins(&ranges, shape[0]);
         let mut out = Array3::zeros(shape);
         out.axis_chunks_iter_mut(Axis(0), PLANES)
             .into_par_iter()
@@ -376,39 +383,29 @@ fn lattice_velocity(
             .for_each(|(chunk, (mut block, bin))| {
                 let first = (chunk * PLANES) as i64;
                 let last = first + block.shape()[0] as i64 - 1;
-                for &n in bin {
+                for_each_in_slab(bin, &ranges, first, last, |n, [i, j, k]| {
                     let m = active[n];
                     let q = m.particle;
                     let (wq, sq) = (particles.omega[q] * weights[q], particles.sigma[q]);
                     let reach2 = kernel::velocity_radius(sq).powi(2);
-                    let r = ranges[n];
-                    for i in r[0].0.max(first)..=r[0].1.min(last) {
-                        for j in r[1].0..=r[1].1 {
-                            for k in r[2].0..=r[2].1 {
-                                let idx = [i, j, k];
-                                let centre = lattice.origin
-                                    + Vec3::from_fn(|b, _| {
-                                        (idx[b] as Real + offset[b]) * lattice.dx
-                                    })
-                                    - m.x;
-                                let (t1, t2) = ((a + 1) % 3, (a + 2) % 3);
-                                let mut sum = 0.0;
-                                for &s1 in &sub {
-                                    for &s2 in &sub {
-                                        let mut d = centre;
-                                        d[t1] += s1 * lattice.dx;
-                                        d[t2] += s2 * lattice.dx;
-                                        if d.norm_squared() < reach2 {
-                                            sum += kernel::velocity(&wq, sq, &d)[a];
-                                        }
-                                    }
-                                }
-                                block[[(i - first) as usize, j as usize, k as usize]] +=
-                                    sum / samples;
+                    let idx = [i, j, k];
+                    let centre = lattice.origin
+                        + Vec3::from_fn(|b, _| (idx[b] as Real + offset[b]) * lattice.dx)
+                        - m.x;
+                    let (t1, t2) = ((a + 1) % 3, (a + 2) % 3);
+                    let mut sum = 0.0;
+                    for &s1 in &sub {
+                        for &s2 in &sub {
+                            let mut d = centre;
+                            d[t1] += s1 * lattice.dx;
+                            d[t2] += s2 * lattice.dx;
+                            if d.norm_squared() < reach2 {
+                                sum += kernel::velocity(&wq, sq, &d)[a];
                             }
                         }
                     }
-                }
+                    block[[(i - first) as usize, j as usize, k as usize]] += sum / samples;
+                });
             });
         out
     })

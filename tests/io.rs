@@ -1,6 +1,8 @@
 //! Round trips of the writers in `eddy::io`: what is written reads back identically, and a
 //! failure leaves no half-written file behind.
 
+mod common;
+
 use std::fs;
 use std::path::Path;
 
@@ -311,6 +313,7 @@ fn pvd_lists_frames_in_order_after_every_push() {
 
 #[test]
 fn pvd_escapes_names_and_parses_as_xml() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.pvd");
     let mut series = PvdSeries::new(&path);
@@ -355,6 +358,7 @@ fn read_attr<T: hdf5::H5Type>(loc: &hdf5::Group, name: &str) -> T {
 
 #[test]
 fn hdf5_frames_roundtrip() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("frames.h5");
     let mut out = Hdf5Frames::create(
@@ -422,6 +426,7 @@ fn hdf5_frames_roundtrip() {
 
 #[test]
 fn hdf5_append_to_truncated_file_is_an_error() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cut.h5");
     let mut out = Hdf5Frames::create(&path, &[("scene", AttrValue::from("cut"))]).unwrap();
@@ -456,6 +461,7 @@ fn hdf5_append_to_truncated_file_is_an_error() {
 
 #[test]
 fn hdf5_rejects_bad_frames_and_attributes() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.h5");
     let dup = Hdf5Frames::create(&path, &[("a", AttrValue::Int(1)), ("a", AttrValue::Int(2))]);
@@ -489,6 +495,7 @@ fn hdf5_rejects_bad_frames_and_attributes() {
 
 #[test]
 fn hdf5_leftover_of_a_crashed_append_is_dropped() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("crash.h5");
     let mut out = Hdf5Frames::create(&path, &[]).unwrap();

@@ -1,6 +1,8 @@
 //! Round trips of the grid writers in `eddy::io`: VTK ImageData for ParaView and HDF5 grid frames
 //! for h5py put every value at the cell it belongs to, and a failure leaves no half-written file.
 
+mod common;
+
 use std::fs;
 use std::path::Path;
 
@@ -285,6 +287,7 @@ fn is_f64(ds: &hdf5::Dataset) -> bool {
 
 #[test]
 fn hdf5_grid_frames_roundtrip() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("grid.h5");
     let mut out = Hdf5GridFrames::create(
@@ -388,6 +391,7 @@ fn hdf5_grid_frames_roundtrip() {
 
 #[test]
 fn hdf5_grid_rejects_mismatched_frames() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.h5");
     let mut out = Hdf5GridFrames::create(&path, &[]).unwrap();
@@ -430,6 +434,7 @@ fn hdf5_grid_rejects_mismatched_frames() {
 
 #[test]
 fn hdf5_grid_create_failures_leave_no_file() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let reserved = Hdf5GridFrames::create(&dir.path().join("r.h5"), &[("dims", AttrValue::Int(3))]);
     assert!(
@@ -445,6 +450,7 @@ fn hdf5_grid_create_failures_leave_no_file() {
 
 #[test]
 fn hdf5_grid_first_append_replaces_stale_geometry() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("retry.h5");
     let mut out = Hdf5GridFrames::create(&path, &[]).unwrap();

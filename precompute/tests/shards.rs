@@ -37,8 +37,17 @@ fn options(out: PathBuf, shard: Option<(usize, usize)>, resume: bool) -> RunOpti
     }
 }
 
+/// HDF5 opens files without close-on-exec: a child spawned while the other test has a database
+/// open inherits the descriptor and its lock, and the next open fails. The two tests of this
+/// file therefore never overlap.
+fn hdf5_or_child() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 #[test]
 fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
+    let _serial = hdf5_or_child();
     let tmp = tempfile::tempdir().expect("temp dir");
     let (spec, _) = spec(tmp.path());
     let full = tmp.path().join("full.h5");
@@ -81,6 +90,7 @@ fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
 
 #[test]
 fn a_killed_run_resumes_to_the_same_database() {
+    let _serial = hdf5_or_child();
     let tmp = tempfile::tempdir().expect("temp dir");
     let (spec, file) = spec(tmp.path());
     let out = tmp.path().join("db.h5");

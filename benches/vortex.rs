@@ -1,10 +1,13 @@
 //! `cargo bench --bench vortex`: vortex-particle synthesis time (Pfaff et al. 2009, section 4.3)
 //! onto a MAC grid at rest against particle count and sigma at 64^3 and 128^3, and onto 100k
 //! SPH-like points. Particles are seeded uniformly with a fixed seed; each time is the median of
-//! five runs after one warm-up.
+//! five runs after one warm-up. Numbers after `--` pick the grid sizes (default 64 and 128).
 
 use eddy::grid::MacGrid;
-use eddy::vortex::{synthesize, SinkField, SinkLayout, VelocitySink, VortexError, VortexParticles};
+use eddy::vortex::{
+    synthesize, AddVelocity, SinkLayout, SinkSamples, SinkVorticity, VelocitySink, VortexError,
+    VortexParticles,
+};
 use eddy::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -44,18 +47,23 @@ impl VelocitySink for Points {
     fn layout(&self) -> SinkLayout<'_> {
         SinkLayout::Points(&self.x)
     }
-    fn vorticity(&self) -> Vec<Vec3> {
-        vec![Vec3::zeros(); self.x.len()]
+    fn vorticity(&self) -> SinkVorticity<'_> {
+        SinkVorticity::Points(vec![Vec3::zeros(); self.x.len()])
     }
-    fn add_velocity(&mut self, field: &SinkField) -> Result<(), VortexError> {
-        if let SinkField::Points(dv) = field {
-            self.v.iter_mut().zip(dv).for_each(|(v, d)| *v += d);
-        }
-        Ok(())
+    fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {
+        add(SinkSamples::Points(&mut self.v))
     }
 }
 
 fn main() {
+    // `cargo bench --bench vortex -- 128` times only the grids named (cargo adds `--bench`).
+    let mut grids: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    if grids.is_empty() {
+        grids = vec![64, 128];
+    }
     println!(
         "grid synthesis, ms (rayon threads: {})",
         rayon::current_num_threads()
@@ -64,7 +72,7 @@ fn main() {
         "{:>5} {:>7} {:>6} {:>9} {:>9}",
         "n", "count", "sigma", "upsample", "ms"
     );
-    for n in [64usize, 128] {
+    for &n in &grids {
         let dx = 1.0 / n as Real;
         for sigma_cells in [2.0, 3.0, 4.0] {
             for count in [100, 1000, 10000] {

@@ -1,10 +1,11 @@
 //! The MAC grid as the vortex layer's velocity source (trilinear interpolation) and sink (face
 //! velocities, vorticity by the grid's own finite differences).
 
-use super::forces::vorticity;
+use super::forces::CellVorticity;
 use super::mac::MacGrid;
 use crate::vortex::{
-    Lattice, Mat3, SinkField, SinkLayout, VelocitySink, VelocitySource, VortexError,
+    AddVelocity, Lattice, Mat3, SinkLayout, SinkSamples, SinkVorticity, VelocitySink,
+    VelocitySource, VortexError,
 };
 use crate::Vec3;
 
@@ -40,31 +41,14 @@ impl VelocitySink for MacGrid {
         })
     }
 
-    fn vorticity(&self) -> Vec<Vec3> {
-        let [wx, wy, wz] = vorticity(self);
-        wx.iter()
-            .zip(wy.iter())
-            .zip(wz.iter())
-            .map(|((&x, &y), &z)| Vec3::new(x, y, z))
-            .collect()
+    fn vorticity(&self) -> SinkVorticity<'_> {
+        let cells = CellVorticity::new(self);
+        SinkVorticity::Cells(Box::new(move |idx, out| cells.row(idx, out)))
     }
 
-    fn add_velocity(&mut self, field: &SinkField) -> Result<(), VortexError> {
-        let SinkField::Faces(faces) = field else {
-            return Err(VortexError::Layout(
-                "a MAC grid takes face velocities".into(),
-            ));
-        };
-        for (u, du) in self.u.iter_mut().zip(faces.iter()) {
-            if u.shape() != du.shape() {
-                return Err(VortexError::Layout(format!(
-                    "face array of shape {:?} for faces of shape {:?}",
-                    du.shape(),
-                    u.shape()
-                )));
-            }
-            ndarray::Zip::from(u).and(du).par_for_each(|u, d| *u += d);
-        }
+    fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {
+        let [u, v, w] = &mut self.u;
+        add(SinkSamples::Faces([u.view_mut(), v.view_mut(), w.view_mut()]))?;
         self.sync_periodic();
         Ok(())
     }

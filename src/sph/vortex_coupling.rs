@@ -6,7 +6,10 @@ use super::fluid::FluidParticles;
 use super::kernel::CubicSpline;
 use super::neighbors::CellGrid;
 use super::solver::SphSolver;
-use crate::vortex::{Mat3, SinkField, SinkLayout, VelocitySink, VelocitySource, VortexError};
+use crate::vortex::{
+    AddVelocity, Mat3, SinkLayout, SinkSamples, SinkVorticity, VelocitySink, VelocitySource,
+    VortexError,
+};
 use crate::{Real, Vec3};
 
 /// A read-only view of the fluid's velocity: the velocity source (the solver itself holds its
@@ -73,24 +76,11 @@ impl VelocitySink for SphSolver {
         SinkLayout::Points(&self.fluid.x)
     }
 
-    fn vorticity(&self) -> Vec<Vec3> {
-        SphSolver::vorticity(self)
+    fn vorticity(&self) -> SinkVorticity<'_> {
+        SinkVorticity::Points(SphSolver::vorticity(self))
     }
 
-    fn add_velocity(&mut self, field: &SinkField) -> Result<(), VortexError> {
-        let SinkField::Points(dv) = field else {
-            return Err(VortexError::Layout(
-                "SPH particles take point velocities".into(),
-            ));
-        };
-        if dv.len() != self.fluid.v.len() {
-            return Err(VortexError::Layout(format!(
-                "{} velocities for {} fluid particles",
-                dv.len(),
-                self.fluid.v.len()
-            )));
-        }
-        self.fluid.v.iter_mut().zip(dv).for_each(|(v, d)| *v += d);
-        Ok(())
+    fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {
+        add(SinkSamples::Points(&mut self.fluid.v))
     }
 }

@@ -17,7 +17,7 @@ pub use particles::VortexParticles;
 pub use synthesis::{synthesize, SynthesisReport};
 
 use crate::{Real, Vec3};
-use ndarray::Array3;
+use ndarray::ArrayViewMut3;
 
 /// A 3 x 3 matrix of [`Real`]; velocity gradients have entry [a][b] = d u_a / d x_b.
 pub type Mat3 = nalgebra::Matrix3<Real>;
@@ -68,24 +68,44 @@ pub enum SinkLayout<'a> {
     Points(&'a [Vec3]),
 }
 
-/// A velocity increment in a sink's layout.
-#[derive(Debug, Clone)]
-pub enum SinkField {
-    /// Face components, `faces[a]` of shape dims + e_a (the MAC layout).
-    Faces(Box<[Array3<Real>; 3]>),
-    /// One vector per point.
+/// A sink's own vorticity (step 1 of section 4.3).
+pub enum SinkVorticity<'a> {
+    /// At the cell centres of a [`SinkLayout::Faces`] lattice, by rows along z: `f([i, j, k],
+    /// out)` writes the vorticity of cells `[i, j, k]` to `[i, j, k + out.len() - 1]` into
+    /// `out`. Finite differences are local, so the layer asks only for the rows under a
+    /// kernel (a full-grid field at 128^3 would cost more than the synthesis), and a row is
+    /// computed from contiguous face data.
+    Cells(CellRows<'a>),
+    /// At each point of a [`SinkLayout::Points`] sink (a point set's curl needs its
+    /// neighbourhoods, so it comes in one sweep).
     Points(Vec<Vec3>),
 }
+
+/// See [`SinkVorticity::Cells`].
+pub type CellRows<'a> = Box<dyn Fn([usize; 3], &mut [Vec3]) + Sync + 'a>;
+
+/// A sink's velocity samples, lent to the layer for an in-place addition.
+pub enum SinkSamples<'a> {
+    /// Face components, `faces[a]` of shape dims + e_a (the MAC layout).
+    Faces([ArrayViewMut3<'a, Real>; 3]),
+    /// One vector per point.
+    Points(&'a mut [Vec3]),
+}
+
+/// What the layer does with lent samples.
+pub type AddVelocity<'f> = dyn FnMut(SinkSamples<'_>) -> Result<(), VortexError> + 'f;
 
 /// Where the layer writes velocity to (synthesis, section 4.3).
 pub trait VelocitySink {
     /// The sink's samples.
     fn layout(&self) -> SinkLayout<'_>;
-    /// The sink's own vorticity (step 1 of section 4.3): at the cell centres in [i, j, k]
-    /// order (k fastest) for [`SinkLayout::Faces`], at the points for [`SinkLayout::Points`].
-    fn vorticity(&self) -> Vec<Vec3>;
-    /// Adds a velocity field given in the sink's layout.
-    fn add_velocity(&mut self, field: &SinkField) -> Result<(), VortexError>;
+    /// The sink's own vorticity: [`SinkVorticity::Cells`] for [`SinkLayout::Faces`],
+    /// [`SinkVorticity::Points`] for [`SinkLayout::Points`].
+    fn vorticity(&self) -> SinkVorticity<'_>;
+    /// Lends the velocity samples to `add`, which adds to them in place, then restores what the
+    /// sink derives from them (a grid's periodic copies). Writing in place spares a dense
+    /// increment field the size of the grid.
+    fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError>;
 }
 
 /// Errors of the vortex layer.

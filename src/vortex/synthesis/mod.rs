@@ -1,0 +1,201 @@
+//! Vorticity synthesis (Pfaff et al. 2009, section 4.3): the three-step process.
+//!
+//! 1. The sink's own vorticity (finite differences on a grid, the point set's curl for SPH).
+//! 2. The desired vorticity `omega_D`, the sum of all particle kernels (see [`kernel`]).
+//! 3. Each particle adds `w_k` times its kernel velocity, with Eq. 14:
+//!    `w_k = sum (omega_D - omega) . a_k / sum omega_D . a_k` over the samples inside the
+//!    particle's cut-off, `a_k` its unit axis. A particle whose denominator is negligible
+//!    (under `1e-6` of the sum of `|omega_D . a_k|`) or that covers no sample is skipped with
+//!    weight zero (PAPER-NOTES.md, Eq. 14 guard).
+//!
+//! On a grid ([`lattice`]), the samples of Eq. 14 are the cells of a synthesis lattice
+//! `upsample` times finer than the sink's (the sink's vorticity interpolated trilinearly onto
+//! it), and each face of the sink receives the mean kernel velocity over `upsample^2` points
+//! spread over the face: the face-averaging restriction of a finer synthesis grid, which keeps
+//! the fluxes through the coarse faces and so the divergence of the kernel. Point sums
+//! ([`points`]) are unweighted: SPH particles share one mass at near-rest density, so each
+//! stands for the same volume.
+//!
+//! Kernel evaluations only touch samples within the cut-off: particles are found through a
+//! hashed grid (points) or visit the samples around their centre (lattices); periodic axes
+//! are handled with particle images.
+
+mod lattice;
+mod points;
+
+use super::{
+    kernel, Lattice, SinkLayout, SinkSamples, SinkVorticity, VelocitySink, VortexError,
+    VortexParticles,
+};
+use crate::{Real, Vec3};
+
+/// What one synthesis did.
+#[derive(Debug, Clone, Default)]
+pub struct SynthesisReport {
+    /// Eq. 14 weight per particle (zero where skipped).
+    pub weights: Vec<Real>,
+    /// Particles skipped by the guard.
+    pub skipped: usize,
+}
+
+/// Synthesizes the particles onto `sink`, on a synthesis lattice `upsample` times finer than a
+/// grid sink's (ignored for point sinks).
+pub fn synthesize<S: VelocitySink + ?Sized>(
+    particles: &VortexParticles,
+    sink: &mut S,
+    upsample: usize,
+) -> Result<SynthesisReport, VortexError> {
+    if upsample == 0 {
+        return Err(VortexError::InvalidSettings(
+            "synthesis upsample factor must be at least 1".into(),
+        ));
+    }
+    if particles.is_empty() {
+        return Ok(SynthesisReport::default());
+    }
+    // The increment is planned while the sink is read and added once it is lent.
+    let planned = match (sink.layout(), sink.vorticity()) {
+        (SinkLayout::Faces(lattice), SinkVorticity::Cells(vorticity)) => {
+            let t0 = std::time::Instant::now();
+            let images = Image::all(particles, &lattice);
+            let sums = lattice::sums(particles, &images, &lattice, upsample, &vorticity);
+            eprintln!("TIMING sums {:.1}", t0.elapsed().as_secs_f64()*1e3);
+            Planned::Faces(lattice, images, weights(&sums))
+        }
+        (SinkLayout::Points(x), SinkVorticity::Points(vorticity)) => {
+            if vorticity.len() != x.len() {
+                return Err(VortexError::Layout(format!(
+                    "{} vorticity samples for {} points",
+                    vorticity.len(),
+                    x.len()
+                )));
+            }
+            let (report, dv) = points::synthesize(particles, x, &vorticity);
+            Planned::Points(dv, report)
+        }
+        _ => return Err(mismatch()),
+    };
+    match planned {
+        Planned::Faces(lattice, images, report) => {
+            let t0 = std::time::Instant::now();
+            let r = sink.add_velocity(&mut |samples| match samples {
+                SinkSamples::Faces(faces) => lattice::add_velocity(
+                    particles,
+                    &images,
+                    &report.weights,
+                    &lattice,
+                    upsample,
+                    faces,
+                ),
+                SinkSamples::Points(_) => Err(mismatch()),
+            });
+            eprintln!("TIMING vel {:.1}", t0.elapsed().as_secs_f64()*1e3);
+            r?;
+            Ok(report)
+        }
+        Planned::Points(dv, report) => {
+            sink.add_velocity(&mut |samples| match samples {
+                SinkSamples::Points(v) if v.len() == dv.len() => {
+                    v.iter_mut().zip(&dv).for_each(|(v, d)| *v += d);
+                    Ok(())
+                }
+                SinkSamples::Points(v) => Err(VortexError::Layout(format!(
+                    "{} velocities for {} points",
+                    v.len(),
+                    dv.len()
+                ))),
+                SinkSamples::Faces(_) => Err(mismatch()),
+            })?;
+            Ok(report)
+        }
+    }
+}
+
+/// A synthesis computed from the sink's state, before it is added.
+enum Planned {
+    /// The lattice, the particle images and the Eq. 14 weights.
+    Faces(Lattice, Vec<Image>, SynthesisReport),
+    /// The velocity increment at every point and the weights.
+    Points(Vec<Vec3>, SynthesisReport),
+}
+
+fn mismatch() -> VortexError {
+    VortexError::Layout("the sink's layout, vorticity and samples disagree (faces or points)".into())
+}
+
+/// The Eq. 14 sums of one particle: sum omega_D . a, sum omega . a, sum |omega_D . a|.
+type Sums = [Real; 3];
+
+/// Eq. 14 with the guard.
+fn weights(sums: &[Sums]) -> SynthesisReport {
+    let weights: Vec<Real> = sums
+        .iter()
+        .map(|&[desired, have, scale]| {
+            if scale > 0.0 && desired.abs() > 1e-6 * scale {
+                (desired - have) / desired
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let skipped = sums
+        .iter()
+        .zip(&weights)
+        .filter(|(s, &w)| w == 0.0 && s[0] != s[1])
+        .count();
+    SynthesisReport { weights, skipped }
+}
+
+/// Unit axis of a vorticity vector (zero for a zero vector).
+#[inline]
+fn axis(omega: &Vec3) -> Vec3 {
+    let n = omega.norm();
+    if n > 0.0 {
+        omega / n
+    } else {
+        Vec3::zeros()
+    }
+}
+
+/// A particle or one of its periodic copies.
+#[derive(Debug, Clone, Copy)]
+struct Image {
+    particle: usize,
+    x: Vec3,
+}
+
+impl Image {
+    /// Every particle, plus its copies shifted by a period along the periodic axes where its
+    /// velocity reach crosses the lattice's end.
+    fn all(particles: &VortexParticles, lattice: &Lattice) -> Vec<Self> {
+        let mut out = Vec::with_capacity(particles.len());
+        for (particle, (x, &s)) in particles.x.iter().zip(&particles.sigma).enumerate() {
+            let reach = kernel::velocity_radius(s);
+            let shifts: [Vec<Real>; 3] = std::array::from_fn(|a| {
+                let mut v = vec![0.0];
+                if lattice.periodic[a] {
+                    let len = lattice.dims[a] as Real * lattice.dx;
+                    let lo = lattice.origin[a];
+                    if x[a] - reach < lo {
+                        v.push(len);
+                    }
+                    if x[a] + reach > lo + len {
+                        v.push(-len);
+                    }
+                }
+                v
+            });
+            for &sx in &shifts[0] {
+                for &sy in &shifts[1] {
+                    for &sz in &shifts[2] {
+                        out.push(Self {
+                            particle,
+                            x: x + Vec3::new(sx, sy, sz),
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+}

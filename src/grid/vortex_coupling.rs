@@ -43,12 +43,16 @@ impl VelocitySink for MacGrid {
 
     fn vorticity(&self) -> SinkVorticity<'_> {
         let cells = CellVorticity::new(self);
-        SinkVorticity::Cells(Box::new(move |idx, out| cells.row(idx, out)))
+        SinkVorticity::Cells(Box::new(move |idx, n| cells.row_sum(idx, n)))
     }
 
     fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {
         let [u, v, w] = &mut self.u;
-        add(SinkSamples::Faces([u.view_mut(), v.view_mut(), w.view_mut()]))?;
+        add(SinkSamples::Faces([
+            u.view_mut(),
+            v.view_mut(),
+            w.view_mut(),
+        ]))?;
         self.sync_periodic();
         Ok(())
     }

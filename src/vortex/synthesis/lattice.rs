@@ -81,11 +81,14 @@ impl Separable {
                 let c = (centre[b] - at.origin[b]) / at.dx - at.offset[b];
                 let (lo_sub, hi_sub) = at.subs[b]
                     .iter()
-                    .fold((0.0 as Real, 0.0 as Real), |(l, h), &s| (l.min(s), h.max(s)));
+                    .fold((0.0 as Real, 0.0 as Real), |(l, h), &s| {
+                        (l.min(s), h.max(s))
+                    });
                 let r = reach / at.dx;
                 let lo = ((c - r - hi_sub).ceil() as i64).max(0);
                 let hi = ((c + r - lo_sub).floor() as i64).min(at.len[b] as i64 - 1);
-                let mut out = Vec::with_capacity(((hi - lo + 1).max(0) as usize) * at.subs[b].len());
+                let mut out =
+                    Vec::with_capacity(((hi - lo + 1).max(0) as usize) * at.subs[b].len());
                 for index in lo..=hi {
                     for &s in &at.subs[b] {
                         let d = (index as Real + s - c) * at.dx;
@@ -179,11 +182,6 @@ fn slab_bins(tables: &[Separable], len: usize) -> Vec<Vec<usize>> {
 }
 
 /// Eq. 14 sums of every particle over the cells of the synthesis lattice under its cut-off.
-///
-/// Each slab task first builds the desired vorticity `omega_D` on its own planes (every image
-/// whose velocity reach touches them adds its kernel vorticity) and the sink's vorticity on the
-/// rows some cut-off covers, then sums both under the cut-off of each image, so each is
-/// computed once per cell rather than once per particle covering it.
 pub(super) fn sums(
     particles: &VortexParticles,
     images: &[Image],
@@ -200,45 +198,67 @@ pub(super) fn sums(
             Separable::new(&m.x, s, kernel::velocity_radius(s), &cells)
         })
         .collect();
-    let slab = Slab {
+    let desired = Desired {
         particles,
         images,
         tables: &tables,
-        lattice,
-        upsample,
-        vorticity,
+        dims: fine.dims,
     };
-    let partial: Vec<Vec<(usize, Sums)>> = slab_bins(&tables, fine.dims[0])
+    let partial: Vec<Vec<(usize, [Real; 2])>> = slab_bins(&tables, fine.dims[0])
         .par_iter()
         .enumerate()
-        .map(|(n, bin)| slab.sums(n * PLANES, bin))
+        .map(|(n, bin)| desired.sums(n * PLANES, bin))
+        .collect();
+    let have: Vec<Vec3> = tables
+        .par_iter()
+        .zip(images)
+        .map(|(t, m)| {
+            let mut have = Vec3::zeros();
+            let cutoff2 = particles.radius(m.particle).powi(2);
+            t.for_each_row(0, usize::MAX, cutoff2, |row| {
+                let (i, j) = (row.x.index, row.y.index);
+                if upsample == 1 {
+                    have += vorticity([i, j, row.z[0].index], row.z.len());
+                } else {
+                    // The sink's vorticity interpolated onto the finer lattice's cells.
+                    for z in row.z {
+                        let g = Vec3::new(i as Real, j as Real, z.index as Real).add_scalar(0.5);
+                        have += sample_cells(vorticity, lattice, &(g / upsample as Real));
+                    }
+                }
+            });
+            have
+        })
         .collect();
     let mut out = vec![[0.0; 3]; particles.len()];
-    for (p, s) in partial.into_iter().flatten() {
-        for c in 0..3 {
-            out[p][c] += s[c];
-        }
+    for (p, [d, scale]) in partial.into_iter().flatten() {
+        out[p][0] += d;
+        out[p][2] += scale;
+    }
+    for (m, h) in images.iter().zip(&have) {
+        out[m.particle][1] += h.dot(&axis(&particles.omega[m.particle]));
     }
     out
 }
 
-/// What a slab task of [`sums`] reads.
-struct Slab<'s, 'v> {
+/// The desired vorticity `omega_D` and its Eq. 14 sums, slab by slab: each slab task builds
+/// `omega_D` on its own planes (every image whose velocity reach touches them adds its kernel
+/// vorticity), then sums it under the cut-off of each image, so it is built once per cell
+/// rather than re-summed for every particle covering the cell.
+struct Desired<'s> {
     particles: &'s VortexParticles,
     images: &'s [Image],
     tables: &'s [Separable],
-    lattice: &'s Lattice,
-    upsample: usize,
-    vorticity: &'s CellRows<'v>,
+    /// The synthesis lattice's cells.
+    dims: [usize; 3],
 }
 
-impl Slab<'_, '_> {
-    /// The Eq. 14 sums, over the planes from `first`, of the images in `bin`.
-    fn sums(&self, first: usize, bin: &[usize]) -> Vec<(usize, Sums)> {
-        let [nx, ny, nz] = self.lattice.refined(self.upsample).dims;
+impl Desired<'_> {
+    /// `[sum omega_D . a, sum |omega_D . a|]` over the planes from `first` for each image in
+    /// `bin`.
+    fn sums(&self, first: usize, bin: &[usize]) -> Vec<(usize, [Real; 2])> {
+        let [nx, ny, nz] = self.dims;
         let last = (first + PLANES).min(nx) - 1;
-        let base = |row: &Row| ((row.x.index - first) * ny + row.y.index) * nz;
-        let cutoff2 = |n: usize| self.particles.radius(self.images[n].particle).powi(2);
         let mut desired = vec![Vec3::zeros(); (last + 1 - first) * ny * nz];
         for &n in bin {
             let p = self.images[n].particle;
@@ -247,7 +267,7 @@ impl Slab<'_, '_> {
             let reach2 = kernel::velocity_radius(s).powi(2);
             // The kernel vorticity (see `kernel::vorticity`) with the tabulated Gaussian.
             self.tables[n].for_each_row(first, last, reach2, |row| {
-                let b = base(&row);
+                let b = row.base(first, ny, nz);
                 for z in row.z {
                     let d = Vec3::new(row.x.d, row.y.d, z.d);
                     let r2 = row.r2xy + z.d2;
@@ -256,31 +276,18 @@ impl Slab<'_, '_> {
                 }
             });
         }
-        let mut have = Vec::new();
         bin.iter()
             .map(|&n| {
                 let p = self.images[n].particle;
                 let a = axis(&self.particles.omega[p]);
-                let mut sums = [0.0; 3];
-                self.tables[n].for_each_row(first, last, cutoff2(n), |row| {
-                    // The sink's vorticity on the run, then the sums.
-                    let (i, j) = (row.x.index, row.y.index);
-                    have.clear();
-                    if self.upsample == 1 {
-                        have.resize(row.z.len(), Vec3::zeros());
-                        (self.vorticity)([i, j, row.z[0].index], &mut have);
-                    } else {
-                        have.extend(row.z.iter().map(|z| {
-                            let g = Vec3::new(i as Real, j as Real, z.index as Real);
-                            sample_cells(self.vorticity, self.lattice, &(g.add_scalar(0.5) / self.upsample as Real))
-                        }));
-                    }
-                    let b = base(&row);
-                    for (z, h) in row.z.iter().zip(&have) {
+                let mut sums = [0.0; 2];
+                let cutoff2 = self.particles.radius(p).powi(2);
+                self.tables[n].for_each_row(first, last, cutoff2, |row| {
+                    let b = row.base(first, ny, nz);
+                    for z in row.z {
                         let d = desired[b + z.index].dot(&a);
                         sums[0] += d;
-                        sums[1] += h.dot(&a);
-                        sums[2] += d.abs();
+                        sums[1] += d.abs();
                     }
                 });
                 (p, sums)
@@ -315,9 +322,7 @@ fn sample_cells(field: &CellRows<'_>, lattice: &Lattice, g: &Vec3) -> Vec3 {
     for (di, wi) in [(w[0].0, 1.0 - w[0].2), (w[0].1, w[0].2)] {
         for (dj, wj) in [(w[1].0, 1.0 - w[1].2), (w[1].1, w[1].2)] {
             for (dk, wk) in [(w[2].0, 1.0 - w[2].2), (w[2].1, w[2].2)] {
-                let mut cell = [Vec3::zeros()];
-                field([di, dj, dk], &mut cell);
-                out += cell[0] * (wi * wj * wk);
+                out += field([di, dj, dk], 1) * (wi * wj * wk);
             }
         }
     }

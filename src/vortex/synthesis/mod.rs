@@ -56,10 +56,8 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
     // The increment is planned while the sink is read and added once it is lent.
     let planned = match (sink.layout(), sink.vorticity()) {
         (SinkLayout::Faces(lattice), SinkVorticity::Cells(vorticity)) => {
-            let t0 = std::time::Instant::now();
             let images = Image::all(particles, &lattice);
             let sums = lattice::sums(particles, &images, &lattice, upsample, &vorticity);
-            eprintln!("TIMING sums {:.1}", t0.elapsed().as_secs_f64()*1e3);
             Planned::Faces(lattice, images, weights(&sums))
         }
         (SinkLayout::Points(x), SinkVorticity::Points(vorticity)) => {
@@ -77,8 +75,7 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
     };
     match planned {
         Planned::Faces(lattice, images, report) => {
-            let t0 = std::time::Instant::now();
-            let r = sink.add_velocity(&mut |samples| match samples {
+            sink.add_velocity(&mut |samples| match samples {
                 SinkSamples::Faces(faces) => lattice::add_velocity(
                     particles,
                     &images,
@@ -88,9 +85,7 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
                     faces,
                 ),
                 SinkSamples::Points(_) => Err(mismatch()),
-            });
-            eprintln!("TIMING vel {:.1}", t0.elapsed().as_secs_f64()*1e3);
-            r?;
+            })?;
             Ok(report)
         }
         Planned::Points(dv, report) => {
@@ -120,7 +115,9 @@ enum Planned {
 }
 
 fn mismatch() -> VortexError {
-    VortexError::Layout("the sink's layout, vorticity and samples disagree (faces or points)".into())
+    VortexError::Layout(
+        "the sink's layout, vorticity and samples disagree (faces or points)".into(),
+    )
 }
 
 /// The Eq. 14 sums of one particle: sum omega_D . a, sum omega . a, sum |omega_D . a|.

@@ -43,7 +43,7 @@ impl VelocitySink for MacGrid {
 
     fn vorticity(&self) -> SinkVorticity<'_> {
         let cells = CellVorticity::new(self);
-        SinkVorticity::Cells(Box::new(move |idx, n| cells.row_sum(idx, n)))
+        SinkVorticity::Cells(Box::new(move |idx, out| cells.row(idx, out)))
     }
 
     fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {

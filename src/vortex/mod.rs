@@ -70,12 +70,10 @@ pub enum SinkLayout<'a> {
 
 /// A sink's own vorticity (step 1 of section 4.3).
 pub enum SinkVorticity<'a> {
-    /// At the cell centres of a [`SinkLayout::Faces`] lattice, summed along z-rows:
-    /// `f([i, j, k], n)` is the vorticity summed over cells `[i, j, k]` to `[i, j, k + n - 1]`.
-    /// Eq. 14 only needs each particle's sum under its cut-off, which a grid gives row by row
-    /// from contiguous face data without the per-cell values, and finite differences are
-    /// local, so only rows under a kernel are visited (a full-grid field at 128^3 would cost
-    /// more than the synthesis).
+    /// At the cell centres of a [`SinkLayout::Faces`] lattice, by rows along z: `f([i, j, k],
+    /// out)` writes the vorticity of cells `[i, j, k]` to `[i, j, k + out.len() - 1]` into
+    /// `out`. Finite differences are local, so the layer asks only for the rows under some
+    /// kernel's cut-off, and a grid computes a row from contiguous runs of face values.
     Cells(CellRows<'a>),
     /// At each point of a [`SinkLayout::Points`] sink (a point set's curl needs its
     /// neighbourhoods, so it comes in one sweep).
@@ -83,7 +81,7 @@ pub enum SinkVorticity<'a> {
 }
 
 /// See [`SinkVorticity::Cells`].
-pub type CellRows<'a> = Box<dyn Fn([usize; 3], usize) -> Vec3 + Sync + 'a>;
+pub type CellRows<'a> = Box<dyn Fn([usize; 3], &mut [Vec3]) + Sync + 'a>;
 
 /// A sink's velocity samples, lent to the layer for an in-place addition.
 pub enum SinkSamples<'a> {

@@ -198,67 +198,48 @@ pub(super) fn sums(
             Separable::new(&m.x, s, kernel::velocity_radius(s), &cells)
         })
         .collect();
-    let desired = Desired {
+    let slab = Slab {
         particles,
         images,
         tables: &tables,
-        dims: fine.dims,
+        lattice,
+        upsample,
+        vorticity,
     };
-    let partial: Vec<Vec<(usize, [Real; 2])>> = slab_bins(&tables, fine.dims[0])
+    let partial: Vec<Vec<(usize, Sums)>> = slab_bins(&tables, fine.dims[0])
         .par_iter()
         .enumerate()
-        .map(|(n, bin)| desired.sums(n * PLANES, bin))
-        .collect();
-    let have: Vec<Vec3> = tables
-        .par_iter()
-        .zip(images)
-        .map(|(t, m)| {
-            let mut have = Vec3::zeros();
-            let cutoff2 = particles.radius(m.particle).powi(2);
-            t.for_each_row(0, usize::MAX, cutoff2, |row| {
-                let (i, j) = (row.x.index, row.y.index);
-                if upsample == 1 {
-                    have += vorticity([i, j, row.z[0].index], row.z.len());
-                } else {
-                    // The sink's vorticity interpolated onto the finer lattice's cells.
-                    for z in row.z {
-                        let g = Vec3::new(i as Real, j as Real, z.index as Real).add_scalar(0.5);
-                        have += sample_cells(vorticity, lattice, &(g / upsample as Real));
-                    }
-                }
-            });
-            have
-        })
+        .map(|(n, bin)| slab.sums(n * PLANES, bin))
         .collect();
     let mut out = vec![[0.0; 3]; particles.len()];
-    for (p, [d, scale]) in partial.into_iter().flatten() {
-        out[p][0] += d;
-        out[p][2] += scale;
-    }
-    for (m, h) in images.iter().zip(&have) {
-        out[m.particle][1] += h.dot(&axis(&particles.omega[m.particle]));
+    for (p, s) in partial.into_iter().flatten() {
+        for c in 0..3 {
+            out[p][c] += s[c];
+        }
     }
     out
 }
 
-/// The desired vorticity `omega_D` and its Eq. 14 sums, slab by slab: each slab task builds
-/// `omega_D` on its own planes (every image whose velocity reach touches them adds its kernel
-/// vorticity), then sums it under the cut-off of each image, so it is built once per cell
-/// rather than re-summed for every particle covering the cell.
-struct Desired<'s> {
+/// The Eq. 14 sums, slab by slab: each slab task builds the desired vorticity `omega_D` on its
+/// own planes (every image whose velocity reach touches them adds its kernel vorticity) and the
+/// sink's vorticity on the runs of its rows that some cut-off covers, then sums both under the
+/// cut-off of each image. Each field is so computed once per cell rather than once for every
+/// particle covering the cell, and never for the whole grid at once.
+struct Slab<'s, 'v> {
     particles: &'s VortexParticles,
     images: &'s [Image],
     tables: &'s [Separable],
-    /// The synthesis lattice's cells.
-    dims: [usize; 3],
+    lattice: &'s Lattice,
+    upsample: usize,
+    vorticity: &'s CellRows<'v>,
 }
 
-impl Desired<'_> {
-    /// `[sum omega_D . a, sum |omega_D . a|]` over the planes from `first` for each image in
-    /// `bin`.
-    fn sums(&self, first: usize, bin: &[usize]) -> Vec<(usize, [Real; 2])> {
-        let [nx, ny, nz] = self.dims;
+impl Slab<'_, '_> {
+    /// The sums over the planes from `first` of each image in `bin`.
+    fn sums(&self, first: usize, bin: &[usize]) -> Vec<(usize, Sums)> {
+        let [nx, ny, nz] = self.lattice.refined(self.upsample).dims;
         let last = (first + PLANES).min(nx) - 1;
+        let cutoff2 = |n: usize| self.particles.radius(self.images[n].particle).powi(2);
         let mut desired = vec![Vec3::zeros(); (last + 1 - first) * ny * nz];
         for &n in bin {
             let p = self.images[n].particle;
@@ -276,23 +257,61 @@ impl Desired<'_> {
                 }
             });
         }
+        let have = self.sink_vorticity(first, last, bin);
         bin.iter()
             .map(|&n| {
                 let p = self.images[n].particle;
                 let a = axis(&self.particles.omega[p]);
-                let mut sums = [0.0; 2];
-                let cutoff2 = self.particles.radius(p).powi(2);
-                self.tables[n].for_each_row(first, last, cutoff2, |row| {
+                let mut sums = [0.0; 3];
+                self.tables[n].for_each_row(first, last, cutoff2(n), |row| {
                     let b = row.base(first, ny, nz);
                     for z in row.z {
+                        let h = match &have {
+                            Some(have) => have[b + z.index],
+                            None => {
+                                let idx = [row.x.index, row.y.index, z.index];
+                                let g = Vec3::from_fn(|c, _| idx[c] as Real + 0.5);
+                                sample_cells(
+                                    self.vorticity,
+                                    self.lattice,
+                                    &(g / self.upsample as Real),
+                                )
+                            }
+                        };
                         let d = desired[b + z.index].dot(&a);
                         sums[0] += d;
-                        sums[1] += d.abs();
+                        sums[1] += h.dot(&a);
+                        sums[2] += d.abs();
                     }
                 });
                 (p, sums)
             })
             .collect()
+    }
+
+    /// The sink's vorticity on the slab's cells under some image's cut-off (one run per row,
+    /// from the first covered cell to the last); `None` on a finer synthesis lattice, whose
+    /// cells interpolate the sink's.
+    fn sink_vorticity(&self, first: usize, last: usize, bin: &[usize]) -> Option<Vec<Vec3>> {
+        if self.upsample != 1 {
+            return None;
+        }
+        let [_, ny, nz] = self.lattice.dims;
+        let mut span = vec![(usize::MAX, 0); (last + 1 - first) * ny];
+        for &n in bin {
+            let cutoff2 = self.particles.radius(self.images[n].particle).powi(2);
+            self.tables[n].for_each_row(first, last, cutoff2, |row| {
+                let s = &mut span[row.base(first, ny, nz) / nz];
+                s.0 = s.0.min(row.z[0].index);
+                s.1 = s.1.max(row.z[row.z.len() - 1].index);
+            });
+        }
+        let mut have = vec![Vec3::zeros(); span.len() * nz];
+        for (r, &(lo, hi)) in span.iter().enumerate().filter(|(_, s)| s.0 <= s.1) {
+            let (i, j) = (first + r / ny, r % ny);
+            (self.vorticity)([i, j, lo], &mut have[r * nz + lo..=r * nz + hi]);
+        }
+        Some(have)
     }
 }
 
@@ -322,7 +341,9 @@ fn sample_cells(field: &CellRows<'_>, lattice: &Lattice, g: &Vec3) -> Vec3 {
     for (di, wi) in [(w[0].0, 1.0 - w[0].2), (w[0].1, w[0].2)] {
         for (dj, wj) in [(w[1].0, 1.0 - w[1].2), (w[1].1, w[1].2)] {
             for (dk, wk) in [(w[2].0, 1.0 - w[2].2), (w[2].1, w[2].2)] {
-                out += field([di, dj, dk], 1) * (wi * wj * wk);
+                let mut cell = [Vec3::zeros()];
+                field([di, dj, dk], &mut cell);
+                out += cell[0] * (wi * wj * wk);
             }
         }
     }

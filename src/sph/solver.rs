@@ -15,6 +15,7 @@ use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order, CellGrid, NeighborLists};
 use super::operators::{self, Operators, WallField};
+use super::pair_cache::{Densities, PairCache};
 use crate::geometry::RigidBody;
 use crate::refine::{self, Refiner, StepContext};
 use crate::scene::{Pressure, PressureSolverKind, Scene, Viscosity};
@@ -91,6 +92,8 @@ pub struct SphSolver {
     grid: CellGrid,
     fluid_lists: NeighborLists,
     boundary_lists: NeighborLists,
+    /// Kernel gradients of this step's pairs.
+    pairs: PairCache,
     /// rho / rho_0 from the last neighbourhood update.
     density_ratio: Vec<Real>,
     /// DFSPH factors (IISPH reads them as -dt^2 / a_ii).
@@ -157,6 +160,7 @@ impl SphSolver {
             grid: CellGrid::build(&[], 2.0 * spacing),
             fluid_lists: NeighborLists::default(),
             boundary_lists: NeighborLists::default(),
+            pairs: PairCache::default(),
             density_ratio: vec![1.0; n],
             factor: vec![0.0; n],
             time: 0.0,
@@ -193,6 +197,7 @@ impl SphSolver {
             boundary_lists: &self.boundary_lists,
             boundary: &self.boundary,
             volume: self.fluid.volume(),
+            pairs: &self.pairs,
         }
     }
 
@@ -202,7 +207,7 @@ impl SphSolver {
     }
 
     /// Places moving bodies at the current time, sorts the fluid into cell order, rebuilds the
-    /// neighbour lists, and computes densities and DFSPH factors.
+    /// neighbour lists, and computes the pairs' kernel gradients, densities and DFSPH factors.
     pub fn update_neighborhoods(&mut self) {
         self.boundary.place(&self.bodies, self.time, false);
         let h = self.kernel.support();
@@ -228,15 +233,26 @@ impl SphSolver {
             h,
             false,
         );
-        let nb = self.neighborhood();
-        let (ratio, factor): (Vec<Real>, Vec<Real>) = (0..self.fluid.len())
-            .into_par_iter()
-            .map(|i| (nb.density_ratio(i), nb.dfsph_factor(i)))
-            .unzip();
+        self.density_ratio.resize(self.fluid.len(), 0.0);
+        self.factor.resize(self.fluid.len(), 0.0);
+        self.pairs.update(
+            &self.kernel,
+            &self.fluid.x,
+            self.fluid.volume(),
+            &self.fluid_lists,
+            &self.boundary_lists,
+            &self.boundary,
+            Densities {
+                ratio: &mut self.density_ratio,
+                factor: &mut self.factor,
+            },
+        );
         let rho0 = self.fluid.rest_density;
-        self.fluid.density = ratio.par_iter().map(|r| r * rho0).collect();
-        self.density_ratio = ratio;
-        self.factor = factor;
+        self.fluid
+            .density
+            .par_iter_mut()
+            .zip(self.density_ratio.par_iter())
+            .for_each(|(d, r)| *d = r * rho0);
     }
 
     /// Advances one step from the state of the last [`Self::update_neighborhoods`].
@@ -260,6 +276,7 @@ impl SphSolver {
             boundary_lists: &self.boundary_lists,
             boundary: &self.boundary,
             volume: *mass / rho0,
+            pairs: &self.pairs,
         };
         let settings = &self.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
@@ -437,6 +454,7 @@ impl SphSolver {
             + self.grid.memory_bytes()
             + self.fluid_lists.memory_bytes()
             + self.boundary_lists.memory_bytes()
+            + self.pairs.memory_bytes()
             + (self.density_ratio.capacity() + self.factor.capacity()) * std::mem::size_of::<Real>()
     }
 }

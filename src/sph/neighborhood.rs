@@ -9,6 +9,7 @@ use super::kernel::CubicSpline;
 use super::neighbors::NeighborLists;
 use super::pair_cache::{widen, PairCache};
 use crate::{Real, Vec3};
+use std::ops::Add;
 
 /// Fluid positions and neighbour lists, boundary samples, the kernel and the fluid rest volume.
 #[derive(Clone, Copy)]
@@ -71,15 +72,30 @@ impl Neighborhood<'_> {
         }
     }
 
-    /// Calls `f(j, grad W_ij)` for every fluid neighbour j of i (the solvers' inner loop, which
-    /// needs no positions).
+    /// sum_j term(j, grad W_ij) over the fluid neighbours j of i: the solvers' inner loop,
+    /// which needs no positions. Even and odd pairs go to two partial sums, because one chain
+    /// of dependent additions would bound the loop by the adder's latency.
     #[inline]
-    fn fluid_grads(&self, i: usize, mut f: impl FnMut(usize, Vec3)) {
+    fn fluid_sum<T: Copy + Add<Output = T>>(
+        &self,
+        i: usize,
+        zero: T,
+        term: impl Fn(usize, Vec3) -> T,
+    ) -> T {
         let (lists, grads) = (self.fluid, &self.pairs.fluid);
         let range = lists.offsets[i] as usize..lists.offsets[i + 1] as usize;
-        for (&j, g) in lists.indices[range.clone()].iter().zip(&grads[range]) {
-            f(j as usize, widen(g));
+        let (idx, grads) = (&lists.indices[range.clone()], &grads[range]);
+        let (mut even, mut odd) = (zero, zero);
+        let pairs = idx.chunks_exact(2).zip(grads.chunks_exact(2));
+        for (j, g) in pairs {
+            even = even + term(j[0] as usize, widen(&g[0]));
+            odd = odd + term(j[1] as usize, widen(&g[1]));
         }
+        if idx.len() % 2 == 1 {
+            let last = idx.len() - 1;
+            even = even + term(idx[last] as usize, widen(&grads[last]));
+        }
+        even + odd
     }
 
     /// Number of fluid plus boundary neighbours of i.
@@ -95,8 +111,7 @@ impl Neighborhood<'_> {
     #[inline]
     pub fn density_rate(&self, i: usize, v: &[Vec3], walls_still: bool) -> Real {
         let vi = v[i];
-        let mut rate = 0.0;
-        self.fluid_grads(i, |j, g| rate += (vi - v[j]).dot(&g));
+        let rate = self.fluid_sum(i, 0.0, |j, g| (vi - v[j]).dot(&g));
         let wall = vi.dot(&self.pairs.wall_grad[i]);
         let moving = if walls_still {
             0.0
@@ -112,8 +127,7 @@ impl Neighborhood<'_> {
     #[inline]
     pub fn stiffness_acceleration(&self, i: usize, kappa: &[Real]) -> Vec3 {
         let ki = kappa[i];
-        let mut a = Vec3::zeros();
-        self.fluid_grads(i, |j, g| a += (ki + kappa[j]) * g);
+        let a = self.fluid_sum(i, Vec3::zeros(), |j, g| (ki + kappa[j]) * g);
         -(self.volume * a + ki * self.pairs.wall_grad[i])
     }
 }

@@ -103,8 +103,8 @@ impl PairCache {
                         fg = rest;
                         for (slot, &j) in seg.iter_mut().zip(fl) {
                             let xij = xi - x[j as usize];
-                            sum += volume * kernel.w(xij.norm());
-                            let g = kernel.grad(&xij);
+                            let (w, g) = kernel.w_grad(&xij);
+                            sum += volume * w;
                             *slot = narrow(&g);
                             let vg = volume * g;
                             gf += vg;
@@ -117,8 +117,8 @@ impl PairCache {
                             let b = b as usize;
                             let xib = xi - boundary.x[b];
                             let vb = boundary.volume[b];
-                            sum += vb * kernel.w(xib.norm());
-                            let g = kernel.grad(&xib);
+                            let (w, g) = kernel.w_grad(&xib);
+                            sum += vb * w;
                             *slot = narrow(&g);
                             gb += vb * g;
                             rate += vb * boundary.v[b].dot(&g);

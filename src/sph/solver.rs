@@ -75,6 +75,10 @@ pub struct StepStats {
     pub pressure: SolveResult,
     /// Wall-clock seconds spent in the turbulence refinement.
     pub refinement_seconds: Real,
+    /// Wall-clock seconds spent in the divergence solve (DFSPH).
+    pub divergence_seconds: Real,
+    /// Wall-clock seconds spent in the pressure (density) solve.
+    pub pressure_seconds: Real,
 }
 
 /// The SPH fluid, its boundary samples, and the settings that drive it.
@@ -312,6 +316,7 @@ impl SphSolver {
         }
         self.last_dt = Some(dt);
         if dfsph && settings.divergence_solver {
+            let start = Instant::now();
             stats.divergence = dfsph::solve(
                 &nb,
                 Solve::Divergence,
@@ -322,6 +327,7 @@ impl SphSolver {
                 dt,
                 bounds(settings.divergence_tolerance),
             );
+            stats.divergence_seconds = start.elapsed().as_secs_f64();
         }
         let walls = self.walls_in_operators;
         let refine_ctx = |volume| StepContext {
@@ -344,6 +350,7 @@ impl SphSolver {
             forces::xsph(&nb, density, rho0, v, self.viscosity.xsph);
         }
         let pressure_bounds = bounds(settings.density_tolerance);
+        let start = Instant::now();
         stats.pressure = if dfsph {
             dfsph::solve(
                 &nb,
@@ -366,6 +373,7 @@ impl SphSolver {
                 pressure_bounds,
             )
         };
+        stats.pressure_seconds = start.elapsed().as_secs_f64();
         if let Some(r) = self.refiner.as_mut() {
             let start = Instant::now();
             r.after_pressure(&refine_ctx(&volume), v);

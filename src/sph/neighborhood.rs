@@ -130,4 +130,23 @@ impl Neighborhood<'_> {
         let a = self.fluid_sum(i, Vec3::zeros(), |j, g| (ki + kappa[j]) * g);
         -(self.volume * a + ki * self.pairs.wall_grad[i])
     }
+
+    /// Second derivative in time of rho_i / rho_0 under the velocities `v` with the positions
+    /// moving at them: sum_j V v_ij^T H_ij v_ij + sum_b V_b v_ib^T H_ib v_ib (H the Hessian of
+    /// W). A step of length dt changes the density ratio by dt [`Self::density_rate`] plus
+    /// dt^2 / 2 this; the second term is positive on average for noisy velocities (the
+    /// Hessian's trace summed over a neighbour shell is positive), so a solver that predicts the
+    /// density to first order only ends its steps more compressed than it predicts.
+    #[inline]
+    pub fn density_curvature(&self, i: usize, v: &[Vec3]) -> Real {
+        let k = self.kernel;
+        let vi = v[i];
+        let mut fluid = 0.0;
+        self.fluid_pairs(i, |j, xij| fluid += k.hessian_form(&xij, &(vi - v[j])));
+        let mut wall = 0.0;
+        self.boundary_pairs(i, |b, xib| {
+            wall += self.boundary.volume[b] * k.hessian_form(&xib, &(vi - self.boundary.v[b]))
+        });
+        self.volume * fluid + wall
+    }
 }

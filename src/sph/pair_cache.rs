@@ -75,10 +75,10 @@ impl PairCache {
         out: Densities,
     ) {
         let n = x.len();
-        self.fluid.resize(fluid_lists.indices.len(), [0.0; 3]);
-        self.boundary.resize(boundary_lists.indices.len(), [0.0; 3]);
-        self.wall_grad.resize(n, Vec3::zeros());
-        self.wall_rate.resize(n, 0.0);
+        fit(&mut self.fluid, fluid_lists.indices.len(), [0.0; 3]);
+        fit(&mut self.boundary, boundary_lists.indices.len(), [0.0; 3]);
+        fit(&mut self.wall_grad, n, Vec3::zeros());
+        fit(&mut self.wall_rate, n, 0.0);
         let tiny = 1e-9 * volume * volume / kernel.support().powi(8);
         let fluid_blocks = split_blocks(fluid_lists, &mut self.fluid);
         let boundary_blocks = split_blocks(boundary_lists, &mut self.boundary);
@@ -139,6 +139,15 @@ impl PairCache {
             + self.wall_grad.capacity() * std::mem::size_of::<Vec3>()
             + self.wall_rate.capacity() * std::mem::size_of::<Real>()
     }
+}
+
+/// Resizes `v` to `len`, growing its allocation by a few percent rather than doubling it (the
+/// pair count drifts a little every step; doubling would hold up to twice the memory).
+fn fit<T: Clone>(v: &mut Vec<T>, len: usize, fill: T) {
+    if len > v.capacity() {
+        v.reserve_exact(len + len / 32 - v.len());
+    }
+    v.resize(len, fill);
 }
 
 #[inline]

@@ -253,6 +253,40 @@ fn kernel_w_at_support_is_zero() {
     assert_eq!(k.w(3.7), 0.0);
 }
 
+/// The Hessian quadratic form (the second-order density prediction of IISPH) is the second
+/// derivative of W along the direction, by central differences, and W and its gradient from the
+/// joint evaluation equal the separate ones exactly.
+#[test]
+fn kernel_hessian_form_and_joint_evaluation_match() {
+    let mut rng = rng(5);
+    for &h in &SUPPORTS {
+        let k = CubicSpline::new(h);
+        let d = 1e-4 * h;
+        for _ in 0..3000 {
+            let r = rng.random_range(0.02 * h..0.98 * h);
+            let x = unit_vector(&mut rng) * r;
+            let u = unit_vector(&mut rng) * rng.random_range(0.1..3.0);
+            let along = |s: Real| k.w((x + s * u).norm());
+            let fd = (along(d) - 2.0 * along(0.0) + along(-d)) / (d * d);
+            let form = k.hessian_form(&x, &u);
+            // The second derivative jumps at q = 1/2; skip samples whose stencil straddles it.
+            if ((x + d * u).norm() - 0.5 * h).abs() < 3.0 * d * u.norm() + 1e-3 * h {
+                continue;
+            }
+            let scale = k.w_zero() / (h * h) * u.norm_squared();
+            assert!(
+                (form - fd).abs() < 1e-4 * scale,
+                "h = {h}: u^T H u = {form:e} vs finite difference {fd:e} at {x:?}, u = {u:?}"
+            );
+            let (w, g) = k.w_grad(&x);
+            assert_eq!(w, k.w(x.norm()));
+            assert_eq!(g, k.grad(&x));
+        }
+        assert_eq!(k.hessian_form(&(Vec3::x() * h), &Vec3::y()), 0.0);
+        assert_eq!(k.w_grad(&(Vec3::x() * h)), (0.0, Vec3::zeros()));
+    }
+}
+
 #[test]
 fn kernel_gradient_matches_finite_difference() {
     let mut rng = rng(3);

@@ -177,21 +177,35 @@ fn dam_break_front_and_energy() {
     assert!(last_e < e0, "a dam break dissipates energy");
 }
 
-/// IISPH holds the same water at rest: every solve ends under its tolerance and no particle
-/// leaves the tank. (Measured after the step, IISPH's average compression is about 0.17 %, above
-/// the 0.05 % it predicts; DFSPH's stays under 0.1 %. Tracked in the issue notes.)
+/// IISPH holds the same water at rest: every solve ends under its tolerance, no particle leaves
+/// the tank, and the compression measured at the new positions is what the solve predicted:
+/// within 20 % of the tolerance after every step and 5 % on average. (Predicting the density to
+/// first order in dt only, as Ihmsen et al. do, measured 0.14 % on average against the 0.05 %
+/// predicted: velocity noise compresses by O(dt^2) each step.)
 #[test]
 fn iisph_keeps_the_tank_incompressible() {
     let scene = scene("scenes/hydrostatic_tank.toml", &["pressure.solver=iisph"]);
+    let tolerance = scene.pressure.density_tolerance;
     let mut s = solver(&scene);
+    let (mut sum, mut steps) = (0.0, 0);
     while s.time() < 0.6 {
         let stats = s.advance().expect("stable");
         s.update_neighborhoods();
         if s.time() > 0.3 {
-            assert!(stats.pressure.error <= scene.pressure.density_tolerance);
+            assert!(stats.pressure.error <= tolerance);
             assert!(s.fluid.x.iter().all(|x| x.y > 0.0 && x.y < 0.6));
+            let (avg, _) = metrics::density_errors(&s.fluid.density, s.fluid.rest_density);
+            assert!(
+                avg < 1.2 * tolerance,
+                "measured average compression {avg} at t = {}",
+                s.time()
+            );
+            sum += avg;
+            steps += 1;
         }
     }
+    let mean = sum / steps as Real;
+    assert!(mean < 1.05 * tolerance, "mean measured compression {mean}");
 }
 
 /// A run from the command-line entry point writes the resolved scene, metrics, probes and a
@@ -240,4 +254,42 @@ fn run_lands_on_its_end_time() {
         "ended at {}",
         summary.time
     );
+}
+
+/// The per-step gradient cache the solvers read holds grad W of every fluid and boundary pair
+/// to single precision, exactly antisymmetric between i and j (so pair forces cancel), and the
+/// wall sums equal the sums over the boundary pairs.
+#[test]
+fn cached_pair_gradients_match_the_kernel() {
+    let scene = scene("scenes/hydrostatic_tank.toml", &[]);
+    let mut s = solver(&scene);
+    for _ in 0..3 {
+        s.advance().expect("stable");
+        s.update_neighborhoods();
+    }
+    let nb = s.neighborhood();
+    let k = nb.kernel;
+    let scale = k.w_zero() / k.support();
+    let mut grads = std::collections::HashMap::new();
+    let mut pairs = 0;
+    for i in 0..s.fluid.len() {
+        nb.fluid_pairs_grad(i, |j, xij, g| {
+            assert!((g - k.grad(&xij)).norm() < 1e-7 * scale, "pair ({i}, {j})");
+            grads.insert((i, j), g);
+            pairs += 1;
+        });
+        let mut wall = Vec3::zeros();
+        nb.boundary_pairs_grad(i, |b, xib, g| {
+            assert!(
+                (g - k.grad(&xib)).norm() < 1e-7 * scale,
+                "wall pair ({i}, {b})"
+            );
+            wall += s.boundary.volume[b] * k.grad(&xib);
+        });
+        assert!((wall - nb.pairs.wall_grad[i]).norm() < 1e-12 * scale * s.spacing.powi(3));
+    }
+    assert!(pairs > 20 * s.fluid.len());
+    for (&(i, j), g) in &grads {
+        assert_eq!(grads[&(j, i)], -g, "grad W_ji != -grad W_ij for ({i}, {j})");
+    }
 }

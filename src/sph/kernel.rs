@@ -54,6 +54,57 @@ impl CubicSpline {
         self.k
     }
 
+    /// W and its gradient at x = x_i - x_j together (one square root): the same values as
+    /// [`Self::w`] at |x| and [`Self::grad`] at x.
+    #[inline]
+    pub fn w_grad(&self, x: &Vec3) -> (Real, Vec3) {
+        let r2 = x.norm_squared();
+        if r2 >= self.h * self.h {
+            return (0.0, Vec3::zeros());
+        }
+        let r = r2.sqrt();
+        if r2 < 1e-24 * self.h * self.h {
+            return (self.w(r), Vec3::zeros());
+        }
+        let q = r * self.inv_h;
+        let (w, dwdq) = if q <= 0.5 {
+            (
+                self.k * (6.0 * q * q * (q - 1.0) + 1.0),
+                self.l * q * (3.0 * q - 2.0),
+            )
+        } else {
+            let t = 1.0 - q;
+            let tw = t.max(0.0);
+            (self.k * 2.0 * tw * tw * tw, -self.l * t * t)
+        };
+        (w, x * (dwdq / (r * self.h)))
+    }
+
+    /// The quadratic form u^T H u of the Hessian H of W at x = x_i - x_j: the second
+    /// derivative of W(|x + s u|) in s at s = 0. With W' and W'' the radial derivatives,
+    /// H = (W' / r) (I - x^ x^T) + W'' x^ x^T (zero at and beyond the support, where the cubic
+    /// spline is twice continuously differentiable).
+    #[inline]
+    pub fn hessian_form(&self, x: &Vec3, u: &Vec3) -> Real {
+        let r2 = x.norm_squared();
+        if r2 >= self.h * self.h {
+            return 0.0;
+        }
+        let r = r2.sqrt();
+        let q = r * self.inv_h;
+        let h2 = self.h * self.h;
+        // W'(r) / r and W''(r), from dW/dq = l q (3q - 2) or -l (1 - q)^2.
+        let (w1_over_r, w2) = if q <= 0.5 {
+            (self.l * (3.0 * q - 2.0) / h2, self.l * (6.0 * q - 2.0) / h2)
+        } else {
+            let t = 1.0 - q;
+            (-self.l * t * t / (q * h2), 2.0 * self.l * t / h2)
+        };
+        let uu = u.norm_squared();
+        let ux2 = if r > 0.0 { x.dot(u).powi(2) / r2 } else { 0.0 };
+        w1_over_r * (uu - ux2) + w2 * ux2
+    }
+
     /// Gradient of W with respect to x_i, evaluated at x = x_i - x_j.
     /// It is antisymmetric: grad W(-x) = -grad W(x).
     #[inline]

@@ -45,6 +45,12 @@ pub struct BenchResult {
     pub boundary: usize,
     pub ms_per_step: f64,
     pub neighbor_ms: f64,
+    /// Milliseconds per step in the neighbourhood update (sort, search, pair cache, densities).
+    pub update_ms: f64,
+    /// Milliseconds per step in the divergence solve.
+    pub divergence_ms: f64,
+    /// Milliseconds per step in the pressure solve.
+    pub pressure_ms: f64,
     pub pressure_iterations: f64,
     pub bytes_per_particle: f64,
     /// Milliseconds per step in the turbulence refinement.
@@ -106,24 +112,33 @@ pub fn measure_with(
         sph.update_neighborhoods();
     }
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
+    let (mut update, mut divergence, mut pressure) = (0.0, 0.0, 0.0);
     for _ in 0..steps {
         let t0 = Instant::now();
         let stats = sph.advance().map_err(unstable)?;
+        let t1 = Instant::now();
         sph.update_neighborhoods();
         total += t0.elapsed().as_secs_f64();
+        update += t1.elapsed().as_secs_f64();
         iterations += stats.pressure.iterations as f64;
         refine += stats.refinement_seconds;
+        divergence += stats.divergence_seconds;
+        pressure += stats.pressure_seconds;
         search += time_neighbor_search(&sph);
     }
+    let ms = |seconds: f64| 1e3 * seconds / steps as f64;
     Ok(BenchResult {
         solver,
         fluid: sph.fluid.len(),
         boundary: sph.boundary.len(),
-        ms_per_step: 1e3 * total / steps as f64,
-        neighbor_ms: 1e3 * search / steps as f64,
+        ms_per_step: ms(total),
+        neighbor_ms: ms(search),
+        update_ms: ms(update),
+        divergence_ms: ms(divergence),
+        pressure_ms: ms(pressure),
         pressure_iterations: iterations / steps as f64,
         bytes_per_particle: sph.memory_bytes() as f64 / sph.fluid.len() as f64,
-        refinement_ms: 1e3 * refine / steps as f64,
+        refinement_ms: ms(refine),
     })
 }
 
@@ -159,12 +174,15 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
         args.steps
     );
     println!(
-        "{:<6} {:>9} {:>9} {:>10} {:>11} {:>8} {:>12} {:>10}",
+        "{:<6} {:>9} {:>9} {:>10} {:>11} {:>10} {:>8} {:>10} {:>8} {:>12} {:>10}",
         "solver",
         "fluid",
         "boundary",
         "ms/step",
         "search ms",
+        "update ms",
+        "div ms",
+        "press ms",
         "p-iters",
         "M p-steps/s",
         "B/particle"
@@ -183,12 +201,15 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
             };
             let r = measure(n, solver, args.warmup, args.steps)?;
             println!(
-                "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>8.1} {:>12.3} {:>10.0}",
+                "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>10.1} {:>8.1} {:>10.1} {:>8.1} {:>12.3} {:>10.0}",
                 name,
                 r.fluid,
                 r.boundary,
                 r.ms_per_step,
                 r.neighbor_ms,
+                r.update_ms,
+                r.divergence_ms,
+                r.pressure_ms,
                 r.pressure_iterations,
                 r.fluid as f64 / r.ms_per_step / 1e3,
                 r.bytes_per_particle

@@ -24,18 +24,16 @@ pub fn viscous_acceleration(
     let mut fluid = Vec3::zeros();
     if nu > 0.0 {
         let mass = nb.volume * rest_density;
-        nb.fluid_pairs(i, |j, xij| {
+        nb.fluid_pairs_grad(i, |j, xij, g| {
             let vij = vi - v[j];
-            fluid +=
-                (mass / density[j]) * vij.dot(&xij) / (xij.norm_squared() + eps) * k.grad(&xij);
+            fluid += (mass / density[j]) * vij.dot(&xij) / (xij.norm_squared() + eps) * g;
         });
     }
     let mut wall = Vec3::zeros();
     if nu_boundary > 0.0 {
-        nb.boundary_pairs(i, |b, xib| {
+        nb.boundary_pairs_grad(i, |b, xib, g| {
             let vib = vi - nb.boundary.v[b];
-            wall +=
-                nb.boundary.volume[b] * vib.dot(&xib) / (xib.norm_squared() + eps) * k.grad(&xib);
+            wall += nb.boundary.volume[b] * vib.dot(&xib) / (xib.norm_squared() + eps) * g;
         });
     }
     10.0 * (nu * fluid + nu_boundary * wall)

@@ -54,6 +54,32 @@ impl CubicSpline {
         self.k
     }
 
+    /// W and its gradient at x = x_i - x_j together (one square root): the same values as
+    /// [`Self::w`] at |x| and [`Self::grad`] at x.
+    #[inline]
+    pub fn w_grad(&self, x: &Vec3) -> (Real, Vec3) {
+        let r2 = x.norm_squared();
+        if r2 >= self.h * self.h {
+            return (0.0, Vec3::zeros());
+        }
+        let r = r2.sqrt();
+        if r2 < 1e-24 * self.h * self.h {
+            return (self.w(r), Vec3::zeros());
+        }
+        let q = r * self.inv_h;
+        let (w, dwdq) = if q <= 0.5 {
+            (
+                self.k * (6.0 * q * q * (q - 1.0) + 1.0),
+                self.l * q * (3.0 * q - 2.0),
+            )
+        } else {
+            let t = 1.0 - q;
+            let tw = t.max(0.0);
+            (self.k * 2.0 * tw * tw * tw, -self.l * t * t)
+        };
+        (w, x * (dwdq / (r * self.h)))
+    }
+
     /// Gradient of W with respect to x_i, evaluated at x = x_i - x_j.
     /// It is antisymmetric: grad W(-x) = -grad W(x).
     #[inline]

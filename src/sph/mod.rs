@@ -10,6 +10,7 @@ pub mod kernel;
 pub mod neighborhood;
 pub mod neighbors;
 pub mod operators;
+pub mod pair_cache;
 pub mod solver;
 pub mod vortex_coupling;
 

@@ -1,9 +1,15 @@
 //! A read-only view of one step's neighbourhoods: what every per-particle SPH sum reads.
+//!
+//! The `_grad` iterators hand out this step's cached kernel gradients (see
+//! [`super::pair_cache`]); they are valid for the positions of the last neighbourhood update,
+//! which do not change until the step's position update.
 
 use super::boundary::BoundaryParticles;
 use super::kernel::CubicSpline;
 use super::neighbors::NeighborLists;
+use super::pair_cache::{widen, PairCache};
 use crate::{Real, Vec3};
+use std::ops::Add;
 
 /// Fluid positions and neighbour lists, boundary samples, the kernel and the fluid rest volume.
 #[derive(Clone, Copy)]
@@ -15,6 +21,8 @@ pub struct Neighborhood<'a> {
     pub boundary: &'a BoundaryParticles,
     /// Rest volume m / rho_0 of a fluid particle.
     pub volume: Real,
+    /// Kernel gradients and wall sums of the positions of the last neighbourhood update.
+    pub pairs: &'a PairCache,
 }
 
 impl Neighborhood<'_> {
@@ -38,20 +46,62 @@ impl Neighborhood<'_> {
         }
     }
 
+    /// Calls `f(j, x_i - x_j, grad W_ij)` for every fluid neighbour j of fluid particle i, with
+    /// the gradient from this step's cache (f32 precision; see [`super::pair_cache`]).
+    #[inline]
+    pub fn fluid_pairs_grad(&self, i: usize, mut f: impl FnMut(usize, Vec3, Vec3)) {
+        let xi = self.x[i];
+        let (lists, grads) = (self.fluid, &self.pairs.fluid);
+        let range = lists.offsets[i] as usize..lists.offsets[i + 1] as usize;
+        for (&j, g) in lists.indices[range.clone()].iter().zip(&grads[range]) {
+            let j = j as usize;
+            f(j, xi - self.x[j], widen(g));
+        }
+    }
+
+    /// Calls `f(b, x_i - x_b, grad W_ib)` for every boundary sample b near fluid particle i,
+    /// with the gradient from this step's cache.
+    #[inline]
+    pub fn boundary_pairs_grad(&self, i: usize, mut f: impl FnMut(usize, Vec3, Vec3)) {
+        let xi = self.x[i];
+        let (lists, grads) = (self.boundary_lists, &self.pairs.boundary);
+        let range = lists.offsets[i] as usize..lists.offsets[i + 1] as usize;
+        for (&b, g) in lists.indices[range.clone()].iter().zip(&grads[range]) {
+            let b = b as usize;
+            f(b, xi - self.boundary.x[b], widen(g));
+        }
+    }
+
+    /// sum_j term(j, grad W_ij) over the fluid neighbours j of i: the solvers' inner loop,
+    /// which needs no positions. Even and odd pairs go to two partial sums, because one chain
+    /// of dependent additions would bound the loop by the adder's latency.
+    #[inline]
+    fn fluid_sum<T: Copy + Add<Output = T>>(
+        &self,
+        i: usize,
+        zero: T,
+        term: impl Fn(usize, Vec3) -> T,
+    ) -> T {
+        let (lists, grads) = (self.fluid, &self.pairs.fluid);
+        let range = lists.offsets[i] as usize..lists.offsets[i + 1] as usize;
+        let (idx, grads) = (&lists.indices[range.clone()], &grads[range]);
+        let (mut even, mut odd) = (zero, zero);
+        let pairs = idx.chunks_exact(2).zip(grads.chunks_exact(2));
+        for (j, g) in pairs {
+            even = even + term(j[0] as usize, widen(&g[0]));
+            odd = odd + term(j[1] as usize, widen(&g[1]));
+        }
+        if idx.len() % 2 == 1 {
+            let last = idx.len() - 1;
+            even = even + term(idx[last] as usize, widen(&grads[last]));
+        }
+        even + odd
+    }
+
     /// Number of fluid plus boundary neighbours of i.
     #[inline]
     pub fn count(&self, i: usize) -> usize {
         self.fluid.of(i).len() + self.boundary_lists.of(i).len()
-    }
-
-    /// Density over rest density, rho_i / rho_0 = V W(0) + sum_j V W_ij + sum_b V_b W_ib.
-    #[inline]
-    pub fn density_ratio(&self, i: usize) -> Real {
-        let k = self.kernel;
-        let mut sum = self.volume * k.w_zero();
-        self.fluid_pairs(i, |_, xij| sum += self.volume * k.w(xij.norm()));
-        self.boundary_pairs(i, |b, xib| sum += self.boundary.volume[b] * k.w(xib.norm()));
-        sum
     }
 
     /// Rate of change of the density ratio for velocities `v`:
@@ -60,21 +110,15 @@ impl Neighborhood<'_> {
     /// operator to pressure accelerations, which walls do not have).
     #[inline]
     pub fn density_rate(&self, i: usize, v: &[Vec3], walls_still: bool) -> Real {
-        let k = self.kernel;
         let vi = v[i];
-        let mut rate = 0.0;
-        self.fluid_pairs(i, |j, xij| {
-            rate += self.volume * (vi - v[j]).dot(&k.grad(&xij))
-        });
-        self.boundary_pairs(i, |b, xib| {
-            let vb = if walls_still {
-                Vec3::zeros()
-            } else {
-                self.boundary.v[b]
-            };
-            rate += self.boundary.volume[b] * (vi - vb).dot(&k.grad(&xib))
-        });
-        rate
+        let rate = self.fluid_sum(i, 0.0, |j, g| (vi - v[j]).dot(&g));
+        let wall = vi.dot(&self.pairs.wall_grad[i]);
+        let moving = if walls_still {
+            0.0
+        } else {
+            self.pairs.wall_rate[i]
+        };
+        self.volume * rate + wall - moving
     }
 
     /// Acceleration from the stiffness field `kappa` (kappa = rho_0 p / rho^2, so this is the
@@ -82,37 +126,8 @@ impl Neighborhood<'_> {
     /// Akinci et al. 2012 Eq. 10: -sum_j V (k_i + k_j) grad W_ij - sum_b V_b k_i grad W_ib.
     #[inline]
     pub fn stiffness_acceleration(&self, i: usize, kappa: &[Real]) -> Vec3 {
-        let k = self.kernel;
         let ki = kappa[i];
-        let mut a = Vec3::zeros();
-        self.fluid_pairs(i, |j, xij| {
-            a -= (self.volume * (ki + kappa[j])) * k.grad(&xij)
-        });
-        self.boundary_pairs(i, |b, xib| {
-            a -= (self.boundary.volume[b] * ki) * k.grad(&xib)
-        });
-        a
-    }
-
-    /// The DFSPH factor: one over the change of rho_i / rho_0 per unit of k_i dt^2,
-    /// |G_f + G_b|^2 + sum_j |V grad W_ij|^2 with G_f = sum_j V grad W_ij and
-    /// G_b = sum_b V_b grad W_ib; zero without neighbours.
-    #[inline]
-    pub fn dfsph_factor(&self, i: usize) -> Real {
-        let k = self.kernel;
-        let (mut gf, mut gb) = (Vec3::zeros(), Vec3::zeros());
-        let mut sq = 0.0;
-        self.fluid_pairs(i, |_, xij| {
-            let g = self.volume * k.grad(&xij);
-            gf += g;
-            sq += g.norm_squared();
-        });
-        self.boundary_pairs(i, |b, xib| gb += self.boundary.volume[b] * k.grad(&xib));
-        let denom = sq + (gf + gb).norm_squared();
-        if denom > 1e-9 * self.volume * self.volume / (k.support().powi(8)) {
-            1.0 / denom
-        } else {
-            0.0
-        }
+        let a = self.fluid_sum(i, Vec3::zeros(), |j, g| (ki + kappa[j]) * g);
+        -(self.volume * a + ki * self.pairs.wall_grad[i])
     }
 }

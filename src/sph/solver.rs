@@ -15,6 +15,7 @@ use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order, CellGrid, NeighborLists};
 use super::operators::{self, Operators, WallField};
+use super::pair_cache::{Densities, PairCache};
 use crate::geometry::RigidBody;
 use crate::refine::{self, Refiner, StepContext};
 use crate::scene::{Pressure, PressureSolverKind, Scene, Viscosity};
@@ -74,6 +75,10 @@ pub struct StepStats {
     pub pressure: SolveResult,
     /// Wall-clock seconds spent in the turbulence refinement.
     pub refinement_seconds: Real,
+    /// Wall-clock seconds spent in the divergence solve (DFSPH).
+    pub divergence_seconds: Real,
+    /// Wall-clock seconds spent in the pressure (density) solve.
+    pub pressure_seconds: Real,
 }
 
 /// The SPH fluid, its boundary samples, and the settings that drive it.
@@ -91,6 +96,8 @@ pub struct SphSolver {
     grid: CellGrid,
     fluid_lists: NeighborLists,
     boundary_lists: NeighborLists,
+    /// Kernel gradients of this step's pairs.
+    pairs: PairCache,
     /// rho / rho_0 from the last neighbourhood update.
     density_ratio: Vec<Real>,
     /// DFSPH factors (IISPH reads them as -dt^2 / a_ii).
@@ -157,6 +164,7 @@ impl SphSolver {
             grid: CellGrid::build(&[], 2.0 * spacing),
             fluid_lists: NeighborLists::default(),
             boundary_lists: NeighborLists::default(),
+            pairs: PairCache::default(),
             density_ratio: vec![1.0; n],
             factor: vec![0.0; n],
             time: 0.0,
@@ -193,6 +201,7 @@ impl SphSolver {
             boundary_lists: &self.boundary_lists,
             boundary: &self.boundary,
             volume: self.fluid.volume(),
+            pairs: &self.pairs,
         }
     }
 
@@ -202,7 +211,7 @@ impl SphSolver {
     }
 
     /// Places moving bodies at the current time, sorts the fluid into cell order, rebuilds the
-    /// neighbour lists, and computes densities and DFSPH factors.
+    /// neighbour lists, and computes the pairs' kernel gradients, densities and DFSPH factors.
     pub fn update_neighborhoods(&mut self) {
         self.boundary.place(&self.bodies, self.time, false);
         let h = self.kernel.support();
@@ -228,15 +237,26 @@ impl SphSolver {
             h,
             false,
         );
-        let nb = self.neighborhood();
-        let (ratio, factor): (Vec<Real>, Vec<Real>) = (0..self.fluid.len())
-            .into_par_iter()
-            .map(|i| (nb.density_ratio(i), nb.dfsph_factor(i)))
-            .unzip();
+        self.density_ratio.resize(self.fluid.len(), 0.0);
+        self.factor.resize(self.fluid.len(), 0.0);
+        self.pairs.update(
+            &self.kernel,
+            &self.fluid.x,
+            self.fluid.volume(),
+            &self.fluid_lists,
+            &self.boundary_lists,
+            &self.boundary,
+            Densities {
+                ratio: &mut self.density_ratio,
+                factor: &mut self.factor,
+            },
+        );
         let rho0 = self.fluid.rest_density;
-        self.fluid.density = ratio.par_iter().map(|r| r * rho0).collect();
-        self.density_ratio = ratio;
-        self.factor = factor;
+        self.fluid
+            .density
+            .par_iter_mut()
+            .zip(self.density_ratio.par_iter())
+            .for_each(|(d, r)| *d = r * rho0);
     }
 
     /// Advances one step from the state of the last [`Self::update_neighborhoods`].
@@ -260,6 +280,7 @@ impl SphSolver {
             boundary_lists: &self.boundary_lists,
             boundary: &self.boundary,
             volume: *mass / rho0,
+            pairs: &self.pairs,
         };
         let settings = &self.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
@@ -295,6 +316,7 @@ impl SphSolver {
         }
         self.last_dt = Some(dt);
         if dfsph && settings.divergence_solver {
+            let start = Instant::now();
             stats.divergence = dfsph::solve(
                 &nb,
                 Solve::Divergence,
@@ -305,6 +327,7 @@ impl SphSolver {
                 dt,
                 bounds(settings.divergence_tolerance),
             );
+            stats.divergence_seconds = start.elapsed().as_secs_f64();
         }
         let walls = self.walls_in_operators;
         let refine_ctx = |volume| StepContext {
@@ -327,6 +350,7 @@ impl SphSolver {
             forces::xsph(&nb, density, rho0, v, self.viscosity.xsph);
         }
         let pressure_bounds = bounds(settings.density_tolerance);
+        let start = Instant::now();
         stats.pressure = if dfsph {
             dfsph::solve(
                 &nb,
@@ -349,6 +373,7 @@ impl SphSolver {
                 pressure_bounds,
             )
         };
+        stats.pressure_seconds = start.elapsed().as_secs_f64();
         if let Some(r) = self.refiner.as_mut() {
             let start = Instant::now();
             r.after_pressure(&refine_ctx(&volume), v);
@@ -437,6 +462,7 @@ impl SphSolver {
             + self.grid.memory_bytes()
             + self.fluid_lists.memory_bytes()
             + self.boundary_lists.memory_bytes()
+            + self.pairs.memory_bytes()
             + (self.density_ratio.capacity() + self.factor.capacity()) * std::mem::size_of::<Real>()
     }
 }

@@ -45,20 +45,27 @@ pub struct Operators<'a> {
 }
 
 impl<'a> Operators<'a> {
-    /// Calls `f(V_j, A_j, x_i - x_j)` for every neighbour of i that takes part: fluid neighbours,
-    /// then boundary samples when walls are on.
+    /// Calls `f(V_j, A_j, x_i - x_j, grad W_ij)` for every neighbour of i that takes part:
+    /// fluid neighbours, then boundary samples when walls are on. The kernel gradients come
+    /// from the step's pair cache (`super::pair_cache`), so no pass evaluates the kernel.
     #[inline]
-    fn pairs(&self, i: usize, a: &[Vec3], wall: WallField, mut f: impl FnMut(Real, Vec3, Vec3)) {
+    fn pairs(
+        &self,
+        i: usize,
+        a: &[Vec3],
+        wall: WallField,
+        mut f: impl FnMut(Real, Vec3, Vec3, Vec3),
+    ) {
         self.nb
-            .fluid_pairs(i, |j, xij| f(self.volume[j], a[j], xij));
+            .fluid_pairs_grad(i, |j, xij, g| f(self.volume[j], a[j], xij, g));
         if self.walls {
             let b = self.nb.boundary;
-            self.nb.boundary_pairs(i, |k, xik| {
+            self.nb.boundary_pairs_grad(i, |k, xik, g| {
                 let ak = match wall {
                     WallField::Velocity => b.v[k],
                     WallField::Zero => Vec3::zeros(),
                 };
-                f(b.volume[k], ak, xik)
+                f(b.volume[k], ak, xik, g)
             });
         }
     }
@@ -76,11 +83,10 @@ impl<'a> Operators<'a> {
     /// [`Self::gradient`] at particle i.
     #[inline]
     pub fn gradient_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Mat3 {
-        let k = self.nb.kernel;
         let ai = a[i];
         let mut g = Mat3::zeros();
-        self.pairs(i, a, wall, |vj, aj, xij| {
-            g += (vj * (aj - ai)) * k.grad(&xij).transpose()
+        self.pairs(i, a, wall, |vj, aj, _, grad| {
+            g += (vj * (aj - ai)) * grad.transpose()
         });
         g
     }
@@ -98,11 +104,10 @@ impl<'a> Operators<'a> {
     /// [`Self::curl`] at particle i.
     #[inline]
     pub fn curl_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Vec3 {
-        let k = self.nb.kernel;
         let ai = a[i];
         let mut c = Vec3::zeros();
-        self.pairs(i, a, wall, |vj, aj, xij| {
-            c += vj * (ai - aj).cross(&k.grad(&xij))
+        self.pairs(i, a, wall, |vj, aj, _, grad| {
+            c += vj * (ai - aj).cross(&grad)
         });
         c
     }
@@ -124,8 +129,8 @@ impl<'a> Operators<'a> {
         let eps = 0.01 * k.support() * k.support();
         let ai = a[i];
         let mut l = Vec3::zeros();
-        self.pairs(i, a, wall, |vj, aj, xij| {
-            l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * k.grad(&xij)
+        self.pairs(i, a, wall, |vj, aj, xij, grad| {
+            l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * grad
         });
         10.0 * l
     }
@@ -141,19 +146,17 @@ impl<'a> Operators<'a> {
 
     /// Gradient (Ye Eq. 7) of a scalar field `s` (walls hold zero).
     pub fn scalar_gradient(&self, s: &[Real]) -> Vec<Vec3> {
-        let k = self.nb.kernel;
         (0..s.len())
             .into_par_iter()
             .map(|i| {
                 let si = s[i];
                 let mut g = Vec3::zeros();
-                self.nb.fluid_pairs(i, |j, xij| {
-                    g += (self.volume[j] * (s[j] - si)) * k.grad(&xij)
-                });
+                self.nb
+                    .fluid_pairs_grad(i, |j, _, grad| g += (self.volume[j] * (s[j] - si)) * grad);
                 if self.walls {
                     let b = self.nb.boundary;
                     self.nb
-                        .boundary_pairs(i, |m, xim| g -= (b.volume[m] * si) * k.grad(&xim));
+                        .boundary_pairs_grad(i, |m, _, grad| g -= (b.volume[m] * si) * grad);
                 }
                 g
             })

@@ -5,8 +5,8 @@
 //! that run), which stays meaningful when a shared machine's load drifts between runs;
 //! "step ratio" compares with the separate plain-DFSPH run.
 
-use super::biot_savart::{biot_savart, DEFAULT_THETA};
-use super::mcvsph::{monte_carlo_biot_savart, sample_indices};
+use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use super::mcvsph::sample_indices;
 use crate::bench::{dam_break_scene, measure_with, BenchArgs};
 use crate::run::{bodies, RunError};
 use crate::scene::PressureSolverKind;
@@ -118,15 +118,15 @@ fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
             let idx = sample_indices(x.len(), count, seed);
             let src: Vec<Vec3> = idx.iter().map(|&k| x[k]).collect();
             let b: Vec<Vec3> = idx.iter().map(|&k| beta[k]).collect();
-            let timed = |theta| {
-                let t0 = Instant::now();
-                let est = monte_carlo_biot_savart(x, &src, &b, x.len(), sph.spacing, theta);
-                (est, 1e3 * t0.elapsed().as_secs_f64())
-            };
-            let (direct, ms) = timed(0.0);
-            direct_ms += ms;
-            let (tree, ms) = timed(DEFAULT_THETA);
-            tree_ms += ms;
+            // The estimate's strengths, (N_f / N) beta, as `monte_carlo_biot_savart` scales them.
+            let scale = x.len() as Real / count as Real;
+            let b: Vec<Vec3> = b.iter().map(|b| scale * b).collect();
+            let t0 = Instant::now();
+            let direct = biot_savart(x, &src, &b, sph.spacing);
+            direct_ms += 1e3 * t0.elapsed().as_secs_f64();
+            let t0 = Instant::now();
+            let tree = BiotSavartTree::new(&src, &b, sph.spacing).evaluate(x, DEFAULT_THETA);
+            tree_ms += 1e3 * t0.elapsed().as_secs_f64();
             for ((t, d), f) in tree.iter().zip(&direct).zip(&full) {
                 sq += (t - f).norm_squared();
                 tree_sq += (t - d).norm_squared();

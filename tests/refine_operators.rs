@@ -1,10 +1,12 @@
 //! The shared SPH difference operators and the velocity kernels of the refinements: curl sign
-//! and accuracy, the walls switch, the sense of single vortices, and the Monte Carlo
-//! Biot–Savart estimator's bias and variance.
+//! and accuracy, the walls switch, the sense of single vortices, the Monte Carlo
+//! Biot–Savart estimator's bias and variance, and the treecode's error.
 
+use eddy::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use eddy::refine::{mcvsph, rankine, vrsph};
 use eddy::run::bodies;
 use eddy::scene::{self, Scene};
+use eddy::sph::neighbors::cell_order;
 use eddy::sph::operators::{curl_of, volumes, Operators, WallField};
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
@@ -56,8 +58,9 @@ fn centre() -> Vec3 {
 ///
 /// On a linear field the difference form gives A M_i with the kernel moment
 /// M_i = -sum_j V_j x_ij (x) grad W_ij, which the continuous kernel makes the identity; on the
-/// cubic lattice (h = 2 spacings) it is kappa I with kappa 2 % short of one. So the curl must
-/// be exactly 2 kappa W, and kappa within 3 % of one.
+/// cubic lattice (h = 2 spacings) it is kappa I with kappa within 2 % of one. So the curl must
+/// be exactly 2 kappa W, and kappa within 3 % of one. M_i is taken with the step's cached
+/// (f32) kernel gradients, the ones the operators read.
 #[test]
 fn solid_body_rotation_has_curl_twice_the_angular_velocity() {
     let scene = block(false, "method = \"none\"");
@@ -78,9 +81,7 @@ fn solid_body_rotation_has_curl_twice_the_angular_velocity() {
     let nb = s.neighborhood();
     for &i in &inside {
         let mut moment = nalgebra::Matrix3::<Real>::zeros();
-        nb.fluid_pairs(i, |j, xij| {
-            moment -= vol[j] * xij * s.kernel.grad(&xij).transpose()
-        });
+        nb.fluid_pairs_grad(i, |j, xij, g| moment -= vol[j] * xij * g.transpose());
         let kappa = moment.trace() / 3.0;
         assert!((moment - kappa * nalgebra::Matrix3::identity()).norm() < 1e-9 * kappa);
         assert!((kappa - 1.0).abs() < 0.03, "kernel moment {kappa}");
@@ -181,7 +182,7 @@ fn a_single_vortex_turns_in_the_sense_of_its_vorticity() {
     assert!(checked >= 8);
     assert!(rankine[c].norm() < 1e-15);
     let target = [Vec3::new(0.5, 0.0, 0.0)];
-    let u = mcvsph::biot_savart(&target, &[Vec3::zeros()], &[Vec3::z()], SPACING)[0];
+    let u = biot_savart(&target, &[Vec3::zeros()], &[Vec3::z()], SPACING)[0];
     assert!(turning(&target[0], &Vec3::zeros(), &u) > 0.0);
     let far_field = 1.0 / (4.0 * std::f64::consts::PI * 0.25);
     assert!((u.y / far_field - 1.0).abs() < 3e-3, "u = {u:?}");
@@ -207,7 +208,7 @@ fn monte_carlo_biot_savart_is_unbiased_with_inverse_sqrt_error() {
         .collect();
     let targets: Vec<Vec3> = (0..40).map(|_| point(&mut rng)).collect();
     let core = 0.02;
-    let full = mcvsph::biot_savart(&targets, &sources, &beta, core);
+    let full = biot_savart(&targets, &sources, &beta, core);
     let norm = (full.iter().map(|u| u.norm_squared()).sum::<Real>() / 40.0).sqrt();
     let seeds = 300;
     let mut scaled_rms = Vec::new();
@@ -218,7 +219,7 @@ fn monte_carlo_biot_savart_is_unbiased_with_inverse_sqrt_error() {
             let idx = mcvsph::sample_indices(population, n, seed);
             let src: Vec<Vec3> = idx.iter().map(|&k| sources[k]).collect();
             let b: Vec<Vec3> = idx.iter().map(|&k| beta[k]).collect();
-            let est = mcvsph::monte_carlo_biot_savart(&targets, &src, &b, population, core);
+            let est = mcvsph::monte_carlo_biot_savart(&targets, &src, &b, population, core, 0.0);
             for (t, e) in est.iter().enumerate() {
                 mean[t] += e / seeds as Real;
                 sq += (e - full[t]).norm_squared();
@@ -244,4 +245,63 @@ fn monte_carlo_biot_savart_is_unbiased_with_inverse_sqrt_error() {
         (lo.min(r), Real::max(hi, r))
     });
     assert!(hi / lo < 1.2, "rms * sqrt(N) not constant: {scaled_rms:?}");
+}
+
+/// The treecode equals the direct Biot–Savart sum within its expansion error: each far node's
+/// contribution is off by at most about (R / d)^2 + 3 (r / d)^2 <= 3 theta^2 of itself
+/// (dipole truncation plus trilinear interpolation). With strengths of one sense (a vortex
+/// blob, no cancellation between nodes) and most nodes well inside the opening bound, the RMS
+/// error must stay below theta^2 / 4 of the signal (a wrong or missing dipole term would make
+/// it first order, about theta / 2), fall as theta -> 0, and be f32 rounding at theta = 0.
+#[test]
+fn treecode_converges_to_the_direct_sum() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut point = |scale: Real| {
+        Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        ) * scale
+    };
+    let sources: Vec<Vec3> = (0..3000).map(|_| point(0.5)).collect();
+    let beta: Vec<Vec3> = (0..3000)
+        .map(|_| Vec3::new(0.0, 0.0, 1.0) + 0.5 * point(1.0))
+        .collect();
+    // Fluid-like targets: a lattice in Morton order (the solver's order), as clusters expect.
+    let lattice: Vec<Vec3> = (0..40_000)
+        .map(|k| Vec3::new((k % 40) as Real, (k / 40 % 40) as Real, (k / 1600) as Real))
+        .map(|p| p * 0.03 - Vec3::repeat(0.6))
+        .collect();
+    let targets: Vec<Vec3> = cell_order(&lattice, 0.06)
+        .iter()
+        .map(|&k| lattice[k as usize])
+        .collect();
+    let core = 0.03;
+    let direct = biot_savart(&targets, &sources, &beta, core);
+    let norm: Real = direct.iter().map(|u| u.norm_squared()).sum();
+    let tree = BiotSavartTree::new(&sources, &beta, core);
+    let error = |theta: Real| {
+        let u = tree.evaluate(&targets, theta);
+        let sq: Real = u
+            .iter()
+            .zip(&direct)
+            .map(|(a, b)| (a - b).norm_squared())
+            .sum();
+        (sq / norm).sqrt()
+    };
+    let mut last = Real::MAX;
+    for theta in [0.8, DEFAULT_THETA, 0.2, 0.1] {
+        let e = error(theta);
+        assert!(
+            e < 0.25 * theta * theta,
+            "theta {theta}: relative error {e:.2e}"
+        );
+        assert!(
+            e < last,
+            "theta {theta}: error {e:.2e} did not fall (before {last:.2e})"
+        );
+        last = e;
+    }
+    assert!(error(DEFAULT_THETA) < 0.01, "default theta");
+    assert!(error(0.0) < 1e-5, "theta = 0: {:.2e}", error(0.0));
 }

@@ -5,7 +5,8 @@
 //! that run), which stays meaningful when a shared machine's load drifts between runs;
 //! "step ratio" compares with the separate plain-DFSPH run.
 
-use super::mcvsph::{biot_savart, monte_carlo_biot_savart, sample_indices};
+use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use super::mcvsph::sample_indices;
 use crate::bench::{dam_break_scene, measure_with, BenchArgs};
 use crate::run::{bodies, RunError};
 use crate::scene::PressureSolverKind;
@@ -71,7 +72,9 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
 
 /// MCVSPH's Biot–Savart estimate (Ye Eq. 26) against the full sum over all fluid particles, on
 /// the vorticity of the dam break after `steps` steps (strengths c V omega, c = 0.05, core one
-/// spacing): relative RMS error over 5 seeds and time per estimate, for 0.1 % to 10 %.
+/// spacing): relative RMS error over 5 seeds and time per estimate, for 0.1 % to 10 %, by the
+/// direct sum and by the treecode at its default opening parameter, with the tree's own error
+/// against the direct sum of the same sample (relative RMS).
 fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
     let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
@@ -103,34 +106,43 @@ fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
         x.len()
     );
     println!(
-        "{:>9} {:>7} {:>10} {:>13} {:>14}",
-        "fraction", "N", "ms", "ms / DFSPH", "rel. RMS error"
+        "{:>9} {:>7} {:>10} {:>10} {:>13} {:>14} {:>12}",
+        "fraction", "N", "direct ms", "tree ms", "tree / DFSPH", "rel. RMS error", "tree error"
     );
     for fraction in [0.001, 0.003, 0.01, 0.03, 0.1] {
         let count = ((fraction * x.len() as Real).round() as usize).max(1);
         let seeds = 5;
-        let (mut sq, mut ms) = (0.0, 0.0);
+        let (mut sq, mut tree_sq, mut direct_sq) = (0.0, 0.0, 0.0);
+        let (mut direct_ms, mut tree_ms) = (0.0, 0.0);
         for seed in 0..seeds {
             let idx = sample_indices(x.len(), count, seed);
             let src: Vec<Vec3> = idx.iter().map(|&k| x[k]).collect();
             let b: Vec<Vec3> = idx.iter().map(|&k| beta[k]).collect();
+            // The estimate's strengths, (N_f / N) beta, as `monte_carlo_biot_savart` scales them.
+            let scale = x.len() as Real / count as Real;
+            let b: Vec<Vec3> = b.iter().map(|b| scale * b).collect();
             let t0 = Instant::now();
-            let est = monte_carlo_biot_savart(x, &src, &b, x.len(), sph.spacing);
-            ms += 1e3 * t0.elapsed().as_secs_f64();
-            sq += est
-                .iter()
-                .zip(&full)
-                .map(|(e, f)| (e - f).norm_squared())
-                .sum::<Real>();
+            let direct = biot_savart(x, &src, &b, sph.spacing);
+            direct_ms += 1e3 * t0.elapsed().as_secs_f64();
+            let t0 = Instant::now();
+            let tree = BiotSavartTree::new(&src, &b, sph.spacing).evaluate(x, DEFAULT_THETA);
+            tree_ms += 1e3 * t0.elapsed().as_secs_f64();
+            for ((t, d), f) in tree.iter().zip(&direct).zip(&full) {
+                sq += (t - f).norm_squared();
+                tree_sq += (t - d).norm_squared();
+                direct_sq += d.norm_squared();
+            }
         }
-        let ms = ms / seeds as Real;
+        let per = |ms: Real| ms / seeds as Real;
         println!(
-            "{:>8.1}% {:>7} {:>10.2} {:>13.3} {:>14.3}",
+            "{:>8.1}% {:>7} {:>10.2} {:>10.2} {:>13.3} {:>14.3} {:>11.2e}",
             100.0 * fraction,
             count,
-            ms,
-            ms / step_ms,
-            (sq / seeds as Real / norm).sqrt()
+            per(direct_ms),
+            per(tree_ms),
+            per(tree_ms) / step_ms,
+            (sq / seeds as Real / norm).sqrt(),
+            (tree_sq / direct_sq).sqrt()
         );
     }
     Ok(())

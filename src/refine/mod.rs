@@ -13,6 +13,7 @@
 //! Refinements that keep per-particle state are told of every reordering of the fluid.
 
 pub mod bench;
+pub mod biot_savart;
 pub mod confinement;
 pub mod mcvsph;
 pub mod micropolar;

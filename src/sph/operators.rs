@@ -45,88 +45,118 @@ pub struct Operators<'a> {
 }
 
 impl<'a> Operators<'a> {
-    /// Calls `f(V_j, A_j, x_i - x_j)` for every neighbour of i that takes part: fluid neighbours,
-    /// then boundary samples when walls are on.
+    /// Calls `f(V_j, A_j, x_i - x_j, grad W_ij)` for every neighbour of i that takes part:
+    /// fluid neighbours, then boundary samples when walls are on. The kernel gradients come
+    /// from the step's pair cache (`super::pair_cache`), so no pass evaluates the kernel.
     #[inline]
-    fn pairs(&self, i: usize, a: &[Vec3], wall: WallField, mut f: impl FnMut(Real, Vec3, Vec3)) {
+    fn pairs(
+        &self,
+        i: usize,
+        a: &[Vec3],
+        wall: WallField,
+        mut f: impl FnMut(Real, Vec3, Vec3, Vec3),
+    ) {
         self.nb
-            .fluid_pairs(i, |j, xij| f(self.volume[j], a[j], xij));
+            .fluid_pairs_grad(i, |j, xij, g| f(self.volume[j], a[j], xij, g));
         if self.walls {
             let b = self.nb.boundary;
-            self.nb.boundary_pairs(i, |k, xik| {
+            self.nb.boundary_pairs_grad(i, |k, xik, g| {
                 let ak = match wall {
                     WallField::Velocity => b.v[k],
                     WallField::Zero => Vec3::zeros(),
                 };
-                f(b.volume[k], ak, xik)
+                f(b.volume[k], ak, xik, g)
             });
         }
     }
 
     /// Gradient tensors (Ye Eq. 7) of the field `a`.
     pub fn gradient(&self, a: &[Vec3], wall: WallField) -> Vec<Mat3> {
-        let k = self.nb.kernel;
-        (0..a.len())
-            .into_par_iter()
-            .map(|i| {
-                let ai = a[i];
-                let mut g = Mat3::zeros();
-                self.pairs(i, a, wall, |vj, aj, xij| {
-                    g += (vj * (aj - ai)) * k.grad(&xij).transpose()
-                });
-                g
-            })
-            .collect()
+        self.gradient_on(a, wall, None)
+    }
+
+    /// [`Self::gradient`] only where `only` holds (zero elsewhere), or everywhere for None.
+    pub fn gradient_on(&self, a: &[Vec3], wall: WallField, only: Option<&[bool]>) -> Vec<Mat3> {
+        per_particle(a.len(), only, |i| self.gradient_at(i, a, wall))
+    }
+
+    /// [`Self::gradient`] at particle i.
+    #[inline]
+    pub fn gradient_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Mat3 {
+        let ai = a[i];
+        let mut g = Mat3::zeros();
+        self.pairs(i, a, wall, |vj, aj, _, grad| {
+            g += (vj * (aj - ai)) * grad.transpose()
+        });
+        g
     }
 
     /// Curl (Liu Eq. 6) of the field `a`.
     pub fn curl(&self, a: &[Vec3], wall: WallField) -> Vec<Vec3> {
-        let k = self.nb.kernel;
-        (0..a.len())
-            .into_par_iter()
-            .map(|i| {
-                let ai = a[i];
-                let mut c = Vec3::zeros();
-                self.pairs(i, a, wall, |vj, aj, xij| {
-                    c += vj * (ai - aj).cross(&k.grad(&xij))
-                });
-                c
-            })
-            .collect()
+        self.curl_on(a, wall, None)
+    }
+
+    /// [`Self::curl`] only where `only` holds (zero elsewhere), or everywhere for None.
+    pub fn curl_on(&self, a: &[Vec3], wall: WallField, only: Option<&[bool]>) -> Vec<Vec3> {
+        per_particle(a.len(), only, |i| self.curl_at(i, a, wall))
+    }
+
+    /// [`Self::curl`] at particle i.
+    #[inline]
+    pub fn curl_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Vec3 {
+        let ai = a[i];
+        let mut c = Vec3::zeros();
+        self.pairs(i, a, wall, |vj, aj, _, grad| {
+            c += vj * (ai - aj).cross(&grad)
+        });
+        c
     }
 
     /// Laplacian (Ye Eq. 8, d = 3) of the field `a`.
     pub fn laplacian(&self, a: &[Vec3], wall: WallField) -> Vec<Vec3> {
+        self.laplacian_on(a, wall, None)
+    }
+
+    /// [`Self::laplacian`] only where `only` holds (zero elsewhere), or everywhere for None.
+    pub fn laplacian_on(&self, a: &[Vec3], wall: WallField, only: Option<&[bool]>) -> Vec<Vec3> {
+        per_particle(a.len(), only, |i| self.laplacian_at(i, a, wall))
+    }
+
+    /// [`Self::laplacian`] at particle i.
+    #[inline]
+    pub fn laplacian_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Vec3 {
         let k = self.nb.kernel;
         let eps = 0.01 * k.support() * k.support();
-        (0..a.len())
+        let ai = a[i];
+        let mut l = Vec3::zeros();
+        self.pairs(i, a, wall, |vj, aj, xij, grad| {
+            l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * grad
+        });
+        10.0 * l
+    }
+
+    /// Marks the particles marked in `set` and their fluid neighbours (the set grown by one
+    /// neighbourhood): what a sum over neighbours of the set reads.
+    pub fn grow(&self, set: &[bool]) -> Vec<bool> {
+        (0..set.len())
             .into_par_iter()
-            .map(|i| {
-                let ai = a[i];
-                let mut l = Vec3::zeros();
-                self.pairs(i, a, wall, |vj, aj, xij| {
-                    l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * k.grad(&xij)
-                });
-                10.0 * l
-            })
+            .map(|i| set[i] || self.nb.fluid.of(i).iter().any(|&j| set[j as usize]))
             .collect()
     }
 
     /// Gradient (Ye Eq. 7) of a scalar field `s` (walls hold zero).
     pub fn scalar_gradient(&self, s: &[Real]) -> Vec<Vec3> {
-        let k = self.nb.kernel;
         (0..s.len())
             .into_par_iter()
             .map(|i| {
                 let si = s[i];
                 let mut g = Vec3::zeros();
-                self.nb.fluid_pairs(i, |j, xij| {
-                    g += (self.volume[j] * (s[j] - si)) * k.grad(&xij)
-                });
+                self.nb
+                    .fluid_pairs_grad(i, |j, _, grad| g += (self.volume[j] * (s[j] - si)) * grad);
                 if self.walls {
                     let b = self.nb.boundary;
                     self.nb
-                        .boundary_pairs(i, |m, xim| g -= (b.volume[m] * si) * k.grad(&xim));
+                        .boundary_pairs_grad(i, |m, _, grad| g -= (b.volume[m] * si) * grad);
                 }
                 g
             })
@@ -143,6 +173,22 @@ pub fn curl_of(g: &Mat3) -> Vec3 {
         g[(0, 2)] - g[(2, 0)],
         g[(1, 0)] - g[(0, 1)],
     )
+}
+
+/// `f(i)` for every particle i below `n` in parallel, or only where `only[i]` holds (the
+/// default, zero, elsewhere).
+pub fn per_particle<T: Default + Send>(
+    n: usize,
+    only: Option<&[bool]>,
+    f: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
+    (0..n)
+        .into_par_iter()
+        .map(|i| match only {
+            Some(only) if !only[i] => T::default(),
+            _ => f(i),
+        })
+        .collect()
 }
 
 /// V_j = m / rho_j for every fluid particle.

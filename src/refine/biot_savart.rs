@@ -1,0 +1,380 @@
+//! Mollified Biot–Savart sums (Ye et al. Eq. 26): the direct O(N_f N) sum and a treecode.
+//!
+//! u(x) = sum_k beta_k x g(x - x_k), g(y) = y / (4 pi (|y|^2 + d^2)^(3/2)): the Rosenhead–Moore
+//! kernel of core d (see `super::mcvsph`), with beta_k a vortex particle's vorticity times
+//! volume.
+//!
+//! **Treecode.** MCVSPH has few sources (N_f / 100) and many targets (every fluid particle), so
+//! the far field is built on both sides, in the manner of Barnes & Hut with target clusters:
+//!
+//! - an octree over the sources, each node with its total strength B = sum beta_k and first
+//!   moments about its centroid c, a = sum beta_k x delta_k and M = sum beta_k delta_k^T
+//!   (delta_k = x_k - c). Vector strengths of both signs have no centre that cancels the
+//!   dipole, so it is kept: with y = x - c and s^2 = |y|^2 + d^2, the Taylor expansion
+//!   g(y - delta) = g(y) - J(y) delta gives
+//!   u(x) = (B x y / s^3 - a / s^3 + 3 (M y) x y / s^5) / (4 pi) + O((R / |y|)^2),
+//!   R the node's radius about c;
+//! - targets in a hierarchy of clusters of consecutive particles (4096, 512, 128; the fluid is
+//!   in Morton order, so a cluster is compact). A node is far from a cluster when
+//!   R + r < theta |c - o|, with o and r the centre and half-diagonal of the cluster's bounding
+//!   box. Far nodes are evaluated at the box's eight corners and interpolated trilinearly to
+//!   each target (second-order error, (r / |y|)^2 <= theta^2 relative, like the expansion
+//!   itself); a node that is neither far nor larger than the cluster is handed down to the
+//!   sub-clusters, and at the finest level near leaves are summed directly, per target, with
+//!   the exact mollified kernel. The coarse levels take the distant nodes, so the corner
+//!   evaluations per target stay few.
+//!
+//! The error is O(theta^2) relative to each far node's contribution and vanishes as
+//! theta -> 0 (at theta = 0 every pair is direct); `tests/refine_operators.rs` checks both.
+
+use crate::sph::operators::Mat3;
+use crate::{Real, Vec3};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Default opening parameter: on the dam-break vorticity at 1 % and 3 % vortex particles the
+/// tree differs from the direct sum by under 1 % RMS of the signal (README, "Refinement
+/// benchmarks"), a hundred times below the Monte Carlo error at those samples; 0.5 doubles
+/// that error for a quarter less time.
+pub const DEFAULT_THETA: Real = 0.4;
+
+/// Targets per cluster at each level of the target hierarchy, coarse to fine (consecutive
+/// targets in Morton order; the finest holds a few neighbourhoods). With the near field on
+/// AVX2, 128 at the finest level was cheaper than 64 or 32 (fewer corner evaluations) and
+/// as accurate.
+const CLUSTERS: [usize; 3] = [4096, 512, 128];
+
+/// Most sources in a leaf of the octree.
+const LEAF: usize = 4;
+
+/// Octree depth beyond which a node stays a leaf (coincident sources).
+const MAX_DEPTH: usize = 40;
+
+/// f32 lanes of the direct sum (independent partial sums the compiler can vectorise).
+const LANES: usize = 8;
+
+/// [`LANES`] sources in f32, structure of arrays: positions and strengths.
+#[derive(Default, Clone, Copy)]
+struct Block {
+    x: [f32; LANES],
+    y: [f32; LANES],
+    z: [f32; LANES],
+    bx: [f32; LANES],
+    by: [f32; LANES],
+    bz: [f32; LANES],
+}
+
+/// Sources in blocks of [`LANES`], relative to an origin; the last block is padded with zero
+/// strengths.
+#[derive(Default)]
+struct Lanes {
+    blocks: Vec<Block>,
+    len: usize,
+}
+
+impl Lanes {
+    /// Adds a source at `x` (relative to the origin) of strength `b`.
+    fn push(&mut self, x: Vec3, b: Vec3) {
+        let l = self.len % LANES;
+        if l == 0 {
+            self.blocks.push(Block::default());
+        }
+        if let Some(block) = self.blocks.last_mut() {
+            block.x[l] = x.x as f32;
+            block.y[l] = x.y as f32;
+            block.z[l] = x.z as f32;
+            block.bx[l] = b.x as f32;
+            block.by[l] = b.y as f32;
+            block.bz[l] = b.z as f32;
+        }
+        self.len += 1;
+    }
+
+    /// sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2), without the 1 / (4 pi).
+    ///
+    /// This loop is the sums' whole near-field cost, so it runs in f32 (twice the SIMD lanes
+    /// of f64) with positions relative to a nearby origin, and on 256-bit vectors where the
+    /// CPU has them; the lanes are added up in f64. The relative accuracy, about 1e-6, is far
+    /// below the Monte Carlo error.
+    fn sum_at(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.sum_at_avx2(p, d2) };
+        }
+        self.sum_lanes(p, d2)
+    }
+
+    /// [`Self::sum_lanes`] compiled for AVX2 (eight f32 lanes in one register).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn sum_at_avx2(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
+        self.sum_lanes(p, d2)
+    }
+
+    /// The portable body of [`Self::sum_at`].
+    #[inline(always)]
+    fn sum_lanes(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
+        let (mut ux, mut uy, mut uz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
+        for b in &self.blocks {
+            for l in 0..LANES {
+                let (dx, dy, dz) = (p.x - b.x[l], p.y - b.y[l], p.z - b.z[l]);
+                let r2 = dx * dx + dy * dy + dz * dz + d2;
+                let inv = 1.0 / (r2 * r2.sqrt());
+                ux[l] += (b.by[l] * dz - b.bz[l] * dy) * inv;
+                uy[l] += (b.bz[l] * dx - b.bx[l] * dz) * inv;
+                uz[l] += (b.bx[l] * dy - b.by[l] * dx) * inv;
+            }
+        }
+        let sum = |a: [f32; LANES]| a.iter().map(|&x| Real::from(x)).sum::<Real>();
+        Vec3::new(sum(ux), sum(uy), sum(uz))
+    }
+}
+
+/// The direct mollified Biot–Savart sum at every target, in parallel over targets.
+pub fn biot_savart(targets: &[Vec3], sources: &[Vec3], beta: &[Vec3], core: Real) -> Vec<Vec3> {
+    let origin = sources.first().copied().unwrap_or_else(Vec3::zeros);
+    let mut lanes = Lanes::default();
+    for (x, b) in sources.iter().zip(beta) {
+        lanes.push(x - origin, *b);
+    }
+    let d2 = (core * core) as f32;
+    targets
+        .par_iter()
+        .map(|p| lanes.sum_at((p - origin).cast::<f32>(), d2) / (4.0 * PI))
+        .collect()
+}
+
+/// One octree node: its sources (a range of the tree's sorted sources), children and moments.
+struct Node {
+    /// Centroid of the source positions, the expansion centre.
+    centre: Vec3,
+    /// Largest distance from the centre to a source.
+    radius: Real,
+    /// Total strength B.
+    total: Vec3,
+    /// a = sum beta_k x delta_k.
+    twist: Vec3,
+    /// M = sum beta_k delta_k^T.
+    moment: Mat3,
+    sources: std::ops::Range<usize>,
+    /// Children are `children` consecutive nodes (none for a leaf).
+    first_child: usize,
+    children: usize,
+}
+
+impl Node {
+    /// The node's far field at `x` times 4 pi (module documentation).
+    #[inline]
+    fn far_field(&self, x: &Vec3, d2: Real) -> Vec3 {
+        let y = x - self.centre;
+        let s2 = y.norm_squared() + d2;
+        let inv3 = 1.0 / (s2 * s2.sqrt());
+        let inv5 = inv3 / s2;
+        (self.total.cross(&y) - self.twist) * inv3 + (3.0 * inv5) * (self.moment * y).cross(&y)
+    }
+}
+
+/// A Barnes–Hut octree over vortex particles, evaluated at clusters of targets.
+pub struct BiotSavartTree {
+    nodes: Vec<Node>,
+    /// Source positions and strengths in tree order.
+    x: Vec<Vec3>,
+    beta: Vec<Vec3>,
+    core: Real,
+}
+
+impl BiotSavartTree {
+    /// The tree over `sources` with strengths `beta` and mollifier core `core`.
+    pub fn new(sources: &[Vec3], beta: &[Vec3], core: Real) -> Self {
+        let mut order: Vec<usize> = (0..sources.len().min(beta.len())).collect();
+        let mut tree = Self {
+            nodes: Vec::new(),
+            x: Vec::new(),
+            beta: Vec::new(),
+            core,
+        };
+        if order.is_empty() {
+            return tree;
+        }
+        let (lo, hi) = bounds(order.iter().map(|&k| sources[k]));
+        let half = 0.5 * (hi - lo).max();
+        tree.nodes.push(tree.node(sources, beta, &order, 0));
+        tree.split(0, sources, beta, &mut order, 0.5 * (lo + hi), half, 0);
+        tree.x = order.iter().map(|&k| sources[k]).collect();
+        tree.beta = order.iter().map(|&k| beta[k]).collect();
+        tree
+    }
+
+    /// The node over `order[range]`'s sources (moments; no children yet).
+    fn node(&self, x: &[Vec3], beta: &[Vec3], idx: &[usize], start: usize) -> Node {
+        let centre = idx.iter().map(|&k| x[k]).sum::<Vec3>() / idx.len() as Real;
+        let mut node = Node {
+            centre,
+            radius: 0.0,
+            total: Vec3::zeros(),
+            twist: Vec3::zeros(),
+            moment: Mat3::zeros(),
+            sources: start..start + idx.len(),
+            first_child: 0,
+            children: 0,
+        };
+        for &k in idx {
+            let delta = x[k] - centre;
+            node.radius = node.radius.max(delta.norm());
+            node.total += beta[k];
+            node.twist += beta[k].cross(&delta);
+            node.moment += beta[k] * delta.transpose();
+        }
+        node
+    }
+
+    /// Splits node `n` (cube of centre `mid` and half side `half`) into its octants,
+    /// reordering `order[n.sources]` so each child's sources are contiguous.
+    #[allow(clippy::too_many_arguments)]
+    fn split(
+        &mut self,
+        n: usize,
+        x: &[Vec3],
+        beta: &[Vec3],
+        order: &mut [usize],
+        mid: Vec3,
+        half: Real,
+        depth: usize,
+    ) {
+        let range = self.nodes[n].sources.clone();
+        if range.len() <= LEAF || depth >= MAX_DEPTH {
+            return;
+        }
+        let octant = |k: usize| {
+            let p = x[k];
+            usize::from(p.x > mid.x) | usize::from(p.y > mid.y) << 1 | usize::from(p.z > mid.z) << 2
+        };
+        order[range.clone()].sort_unstable_by_key(|&k| octant(k));
+        let mut parts = Vec::with_capacity(8);
+        let mut start = range.start;
+        while start < range.end {
+            let o = octant(order[start]);
+            let end = start + order[start..range.end].partition_point(|&k| octant(k) == o);
+            parts.push((o, start..end));
+            start = end;
+        }
+        let first = self.nodes.len();
+        for (_, r) in &parts {
+            let node = self.node(x, beta, &order[r.clone()], r.start);
+            self.nodes.push(node);
+        }
+        self.nodes[n].first_child = first;
+        self.nodes[n].children = parts.len();
+        let q = 0.5 * half;
+        for (c, (o, _)) in parts.into_iter().enumerate() {
+            let sign = |bit: usize| if o >> bit & 1 == 1 { q } else { -q };
+            let child_mid = mid + Vec3::new(sign(0), sign(1), sign(2));
+            self.split(first + c, x, beta, order, child_mid, q, depth + 1);
+        }
+    }
+
+    /// The velocity the sources induce at every target, with opening parameter `theta`
+    /// (0 sums every pair directly).
+    pub fn evaluate(&self, targets: &[Vec3], theta: Real) -> Vec<Vec3> {
+        let mut out = vec![Vec3::zeros(); targets.len()];
+        if !self.nodes.is_empty() && !targets.is_empty() {
+            self.descend(targets, &mut out, &[0], theta, 0);
+        }
+        out
+    }
+
+    /// Adds to `out` the field of the `candidates` nodes at the cluster `targets` at level
+    /// `depth` of the target hierarchy: nodes far from the whole cluster by its corners,
+    /// the rest handed down to the sub-clusters, or summed directly at the finest level.
+    fn descend(
+        &self,
+        targets: &[Vec3],
+        out: &mut [Vec3],
+        candidates: &[usize],
+        theta: Real,
+        depth: usize,
+    ) {
+        let finest = depth == CLUSTERS.len();
+        let (lo, hi) = bounds(targets.iter().copied());
+        let origin = 0.5 * (lo + hi);
+        let reach = 0.5 * (hi - lo).norm();
+        let (mut far, mut rest) = (Vec::new(), Vec::new());
+        let mut stack = candidates.to_vec();
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            if node.radius + reach < theta * (node.centre - origin).norm() {
+                far.push(n);
+            } else if node.children > 0 && (finest || node.radius > reach) {
+                stack.extend(node.first_child..node.first_child + node.children);
+            } else {
+                rest.push(n);
+            }
+        }
+        let d2 = self.core * self.core;
+        if !far.is_empty() {
+            self.add_interpolated(targets, out, &far, (lo, hi));
+        }
+        if finest {
+            let mut near = Lanes::default();
+            for &n in &rest {
+                for k in self.nodes[n].sources.clone() {
+                    near.push(self.x[k] - origin, self.beta[k]);
+                }
+            }
+            for (u, p) in out.iter_mut().zip(targets) {
+                *u += near.sum_at((p - origin).cast::<f32>(), d2 as f32) / (4.0 * PI);
+            }
+        } else if !rest.is_empty() {
+            out.par_chunks_mut(CLUSTERS[depth])
+                .zip(targets.par_chunks(CLUSTERS[depth]))
+                .for_each(|(u, t)| self.descend(t, u, &rest, theta, depth + 1));
+        }
+    }
+
+    /// Adds the field of the `far` nodes, evaluated at the eight corners of the box `(lo, hi)`
+    /// and interpolated trilinearly, to `out` at `targets` (inside the box).
+    fn add_interpolated(
+        &self,
+        targets: &[Vec3],
+        out: &mut [Vec3],
+        far: &[usize],
+        (lo, hi): (Vec3, Vec3),
+    ) {
+        let d2 = self.core * self.core;
+        // Corner c has bit a set for the upper side along axis a.
+        let corners: [Vec3; 8] = std::array::from_fn(|c| {
+            let corner = Vec3::new(
+                if c & 1 == 1 { hi.x } else { lo.x },
+                if c & 2 == 2 { hi.y } else { lo.y },
+                if c & 4 == 4 { hi.z } else { lo.z },
+            );
+            far.iter()
+                .map(|&n| self.nodes[n].far_field(&corner, d2))
+                .sum::<Vec3>()
+                / (4.0 * PI)
+        });
+        let extent = hi - lo;
+        let fraction = |p: Real, lo: Real, e: Real| if e > 0.0 { (p - lo) / e } else { 0.0 };
+        for (u, p) in out.iter_mut().zip(targets) {
+            let t = Vec3::new(
+                fraction(p.x, lo.x, extent.x),
+                fraction(p.y, lo.y, extent.y),
+                fraction(p.z, lo.z, extent.z),
+            );
+            for (c, value) in corners.iter().enumerate() {
+                let w = |a: usize| if c >> a & 1 == 1 { t[a] } else { 1.0 - t[a] };
+                *u += (w(0) * w(1) * w(2)) * value;
+            }
+        }
+    }
+}
+
+/// Componentwise bounding box of `points` (at least one).
+fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    points.fold(
+        (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN)),
+        |(lo, hi), p| (lo.inf(&p), hi.sup(&p)),
+    )
+}

@@ -63,7 +63,7 @@ pub fn scene(spec: &ObstacleSpec, kind: MotionKind, direction: &Vec3) -> anyhow:
         dt_min = dt * 1e-3,
         nu = g.viscosity,
         n = g.resolution,
-        tol = g.tolerance,
+        tol = g.stabilise_tolerance,
     );
     let mut scene = eddy::scene::parse_str(&text, Path::new("precompute.toml"), &[])
         .context("building the precomputation scene")?;
@@ -149,6 +149,7 @@ pub fn solve(
     for _ in 0..spec.grid.stabilise_steps {
         solver.advance(None)?;
     }
+    solver.set_solver_tolerance(spec.grid.tolerance);
     let l = spec.layer.thickness * spec.spacing()?;
     let outside: Vec<Point3> = surface
         .points

@@ -52,9 +52,14 @@ pub struct GridSettings {
     /// Advection scheme of the velocity.
     #[serde(default = "d_advection")]
     pub advection: Advection,
-    /// Relative residual of the pressure and viscosity solves.
+    /// Relative residual of the pressure and viscosity solves while averaging.
     #[serde(default = "d_tolerance")]
     pub tolerance: Real,
+    /// Relative residual of the solves while stabilising: only the flow they lead to matters,
+    /// and 1e-3 there moves omega_pre by about 1e-4 of itself (sphere, 32^3) for a fifth less
+    /// time; 1e-2 moves it by 10 %.
+    #[serde(default = "d_stabilise_tolerance")]
+    pub stabilise_tolerance: Real,
 }
 
 /// The artificial boundary layer of Figure 5.
@@ -102,6 +107,9 @@ fn d_advection() -> Advection {
 }
 fn d_tolerance() -> Real {
     1e-5
+}
+fn d_stabilise_tolerance() -> Real {
+    1e-3
 }
 fn d_beta() -> Real {
     1.0
@@ -189,12 +197,12 @@ impl ObstacleSpec {
         let avg = Real::from(g.average_steps);
         check("grid.average_steps", avg, avg >= 1.0, "at least 1")?;
         check("grid.cfl", g.cfl, g.cfl > 0.0 && g.cfl <= 5.0, "(0, 5]")?;
-        check(
-            "grid.tolerance",
-            g.tolerance,
-            g.tolerance > 0.0 && g.tolerance <= 0.1,
-            "(0, 0.1]",
-        )?;
+        for (key, tol) in [
+            ("grid.tolerance", g.tolerance),
+            ("grid.stabilise_tolerance", g.stabilise_tolerance),
+        ] {
+            check(key, tol, tol > 0.0 && tol <= 0.1, "(0, 0.1]")?;
+        }
         let l = &self.layer;
         check("layer.beta", l.beta, true, "any finite number")?;
         check(

@@ -454,3 +454,43 @@ fn wrong_obstacle_missing_direction_truncated_and_foreign_files_are_refused() {
     assert!(matches!(e, AblError::Corrupt { .. }), "{msg}");
     assert!(msg.contains("/rotation/dataset omega has shape"), "{msg}");
 }
+
+/// A mesh's fingerprint is that of its bytes and scale: the same mesh under another name gives
+/// the same fingerprint, a moved vertex or another scale a different one, so a database made
+/// for one mesh opens for its copy and is refused for the edited mesh.
+#[test]
+fn mesh_fingerprint_follows_the_geometry_not_the_file_name() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let tetrahedron = |top: &str| {
+        format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 {top}\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    };
+    let write = |name: &str, text: &str| {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, text).expect("writes the mesh");
+        path
+    };
+    let mesh = |path: &Path, scale: Real| Shape::Mesh {
+        path: path.to_path_buf(),
+        scale,
+    };
+    let original = write("original.obj", &tetrahedron("1"));
+    let copy = write("renamed.obj", &tetrahedron("1"));
+    let moved = write("moved.obj", &tetrahedron("1.001"));
+    let fp = |shape: &Shape| geometry_fingerprint(shape).expect("fingerprints");
+    let base = fp(&mesh(&original, 1.0));
+    assert_eq!(base, fp(&mesh(&copy, 1.0)));
+    assert_ne!(base, fp(&mesh(&moved, 1.0)));
+    assert_ne!(base, fp(&mesh(&original, 2.0)));
+    assert_eq!(base.len(), 64);
+    assert!(matches!(
+        geometry_fingerprint(&mesh(&tmp.path().join("missing.obj"), 1.0)),
+        Err(AblError::Mesh { .. })
+    ));
+
+    let mut data = synthetic(Sampling::new(4, 6).expect("valid"));
+    data.header.geometry_fingerprint = base;
+    let path = written(tmp.path(), &data);
+    AblDatabase::open(&path, Some(&mesh(&copy, 1.0))).expect("the same mesh opens");
+    let (e, msg) = open_err(&path, Some(&mesh(&moved, 1.0)));
+    assert!(matches!(e, AblError::WrongObstacle { .. }), "{msg}");
+}

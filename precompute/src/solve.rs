@@ -149,6 +149,7 @@ pub fn solve(
     for _ in 0..spec.grid.stabilise_steps {
         solver.advance(None)?;
     }
+    // The scene's solves ran at the stabilising tolerance; the averaged flow gets the tight one.
     solver.set_solver_tolerance(spec.grid.tolerance);
     let l = spec.layer.thickness * spec.spacing()?;
     let outside: Vec<Point3> = surface

@@ -139,11 +139,12 @@ impl Sampling {
             ]
         };
         let mut c = corners(i0);
-        for _ in 0..self.polar {
+        // Every move is followed by a solve in the new cell; the cap only guards the loop.
+        for moves in 0.. {
             (s, t) = quad::invert(&c, d, s, t);
-            if t < -SNAP && i0 > 0 {
+            if t < -SNAP && i0 > 0 && moves < self.polar {
                 (i0, t) = (i0 - 1, 1.0);
-            } else if t > 1.0 + SNAP && i0 + 2 < self.polar {
+            } else if t > 1.0 + SNAP && i0 + 2 < self.polar && moves < self.polar {
                 (i0, t) = (i0 + 1, 0.0);
             } else {
                 break;
@@ -218,8 +219,25 @@ mod tests {
         let w = s.weights(&d);
         let cols: Vec<usize> = w.iter().map(|(r, _)| r % s.azimuth).collect();
         assert!(cols.contains(&19) && cols.contains(&0), "{cols:?}");
-        // Near a constant-theta edge (which bulges poleward), off it, and next to a pole.
+        // Just poleward of ring 3 (60 degrees) half-way between two meridians: the cell's
+        // great-circle edge bulges 0.3 degrees further poleward, so the direction belongs to
+        // the cell below the ring, not to the (theta, phi) cell above it.
+        let ring = PI / (s.polar - 1) as Real;
+        let (theta, phi) = (3.0 * ring - 1e-3, 0.5 * 2.0 * PI / s.azimuth as Real);
+        let below_ring = Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        );
+        let rings: Vec<usize> = s
+            .weights(&below_ring)
+            .iter()
+            .map(|(r, _)| r / s.azimuth)
+            .collect();
+        assert_eq!(rings, [3, 3, 4, 4]);
+        // There, near the seam, off any edge and next to a pole, the weights give d back.
         for d in [
+            below_ring,
             d,
             Vec3::new(0.3, 0.2, 0.93).normalize(),
             Vec3::new(-0.5, 0.7, -0.1).normalize(),

@@ -10,6 +10,10 @@ use eddy::scene::{Advection, Body, Shape};
 use eddy::Real;
 use serde::{Deserialize, Serialize};
 
+/// How the precomputation runs, beyond the settings: part of the fingerprint, so that shards and
+/// parts computed by a different scheme are never merged or resumed into one database.
+const SCHEME: &[u8] = b"free stream prescribed on every side";
+
 /// One obstacle and how to precompute its artificial boundary layer.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -291,7 +295,11 @@ impl ObstacleSpec {
         if let Shape::Mesh { path, .. } = &mut settings.shape {
             *path = PathBuf::new();
         }
-        let all = hash_hex(&[geometry.as_bytes(), settings.settings_toml().as_bytes()]);
+        let all = hash_hex(&[
+            SCHEME,
+            geometry.as_bytes(),
+            settings.settings_toml().as_bytes(),
+        ]);
         Ok((all, geometry))
     }
 }

@@ -180,3 +180,64 @@ fn inviscid_sphere_matches_potential_flow() {
         "equatorial speed {peak:.4} vs 1.5"
     );
 }
+
+/// A sphere spinning at 1 rad/s about z in still viscous fluid drags the fluid round with it,
+/// but the fluid just outside the layer lags the wall: relative to the wall it moves against
+/// the wall's motion, `U_rel = -c (z x x)` with 0 < c <= 1, so omega_pre = beta (U_rel x n)
+/// = beta c R (z - n_z n). That is axisymmetric about z, zero at the poles of the axis and
+/// largest at its equator, and points along +z there (the sense of the spin, as a translation's
+/// omega points along (-d) x n for fluid streaming past at -d).
+#[test]
+fn spinning_sphere_is_axisymmetric_zero_at_the_poles_and_lags_the_wall() {
+    let spec = sphere(&["grid.resolution=24"]);
+    let surface = Surface::of(&spec).expect("surface");
+    let axis = Vec3::z();
+    let omega = solve(&spec, &surface, MotionKind::Rotation, &axis).expect("solves");
+    let prof = profile(&surface, &omega, &axis);
+    let bands = band_means(&prof);
+    println!("bands (theta, |omega| / beta): {bands:.3?}");
+    let (peak_theta, peak) = bands
+        .iter()
+        .copied()
+        .fold((0.0, 0.0), |m, b| if b.1 > m.1 { b } else { m });
+    assert!(
+        (70.0..=110.0).contains(&peak_theta),
+        "peak at {peak_theta} degrees"
+    );
+    // The fluid is dragged along, never against the spin: the relative speed at the equator is
+    // below the wall speed R.
+    assert!(
+        peak < RADIUS,
+        "equatorial relative speed {peak:.4}, wall speed {RADIUS}"
+    );
+    // The wall speed is R sin(theta): towards the poles no more than that profile through the
+    // peak reaches at the edge of the first band.
+    let edge = BAND.to_radians().sin() * peak;
+    let (north, south) = (bands[0].1, bands[bands.len() - 1].1);
+    assert!(
+        north < edge && south < edge,
+        "north {north:.4}, south {south:.4}, bound {edge:.4}"
+    );
+    // Axisymmetry about the spin axis, as for the translation (staircase of a 4-cell radius).
+    let rms = (prof
+        .iter()
+        .map(|&(t, m)| (m - smooth(&bands, t)).powi(2))
+        .sum::<Real>()
+        / prof.len() as Real)
+        .sqrt();
+    println!(
+        "rms departure from axisymmetry: {:.4} of the peak",
+        rms / peak
+    );
+    assert!(rms < 0.05 * peak, "rms departure {rms:.4}, peak {peak:.4}");
+    // The sign: along z - n_z n (the fluid lags the wall), away from the poles.
+    for ((n, w), &(theta, _)) in surface.normals.iter().zip(&omega).zip(&prof) {
+        if (30.0..=150.0).contains(&theta) {
+            let lagging = (axis - n * n.z).normalize();
+            assert!(
+                w.dot(&lagging) > 0.9 * w.norm(),
+                "theta {theta:.1}: {w:?} against {lagging:?}"
+            );
+        }
+    }
+}

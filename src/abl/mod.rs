@@ -11,6 +11,7 @@ mod database;
 mod error;
 mod fingerprint;
 mod format;
+mod quad;
 mod sampling;
 
 pub use database::AblDatabase;

@@ -24,7 +24,7 @@ pub enum DiffusionSide {
 }
 
 /// Periodicity and side conditions of a diffused component.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DiffusionBoundary {
     pub periodic: [bool; 3],
     /// `sides[axis][0 = low, 1 = high]`; ignored on periodic axes.
@@ -36,6 +36,7 @@ pub struct DiffusionBoundary {
 /// Cells where `unknown` is false hold fixed (Dirichlet) values in `x` and are not changed.
 /// Beyond the array, per side: [`DiffusionSide::Neumann`] (ghost = x_i),
 /// [`DiffusionSide::Mirror`] (ghost = -x_i), or periodic. `x` is the initial guess too.
+/// Builds the system for this one solve; [`DiffusionSystem`] keeps it for the next.
 pub fn solve_diffusion(
     unknown: &Array3<bool>,
     boundary: &DiffusionBoundary,
@@ -43,94 +44,142 @@ pub fn solve_diffusion(
     x: &mut Array3<Real>,
     settings: &SolverSettings,
 ) -> Result<SolveStats, SolveError> {
-    let d = unknown.dim();
-    let layout = Layout {
-        n: [d.0, d.1, d.2],
-        periodic: boundary.periodic,
-    };
-    check_shape(&layout, "x", x)?;
-    check_settings(settings)?;
-    if !(a >= 0.0 && a.is_finite()) {
-        return Err(SolveError::InvalidParameter {
-            name: "a (nu dt / dx^2)",
-            value: a,
-            allowed: "finite and not negative",
-        });
-    }
-    if let Some(idx) = x.iter().position(|v| !v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "x",
-            cell: coordinates(&layout, idx),
-        });
-    }
-    if a == 0.0 {
-        return Ok(SolveStats::default());
-    }
-    let kinds: Vec<u8> = unknown
-        .iter()
-        .map(|&u| if u { FLUID } else { DIRICHLET })
-        .collect();
-    let side_weight = boundary
-        .sides
-        .map(|s| s.map(|s| if s == DiffusionSide::Mirror { 2 } else { 0 }));
-    let problem = Problem {
-        layout,
-        kinds,
-        side_weight,
-        shift: 1.0,
-        scale: a,
-    };
-    let dirichlet = problem.dirichlet_table();
-    let stencil = FineStencil::new(&problem, &dirichlet);
-    let mut multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
-    let mut work = Workspace::new(layout.len());
-    load(&layout, "x", x, |i| problem.kinds[i] == FLUID, &mut work.x)?;
-    let old: Vec<f64> = x.iter().copied().collect();
-    // b = x_old + a * (sum of fixed neighbours) on the unknowns.
-    let rhs = |(idx, b): (usize, &mut f64)| {
-        if problem.kinds[idx] != FLUID {
-            return;
+    DiffusionSystem::new(unknown, boundary, a)?.solve(x, settings)
+}
+
+/// The diffusion system `(1 + a L)` of one set of unknowns, sides and `a`, with its multigrid
+/// hierarchy. Building the hierarchy costs about as much as a solve, and the unknowns, sides
+/// and `a` stay the same from step to step at a fixed time step around a static (or rigidly
+/// spinning, symmetric) obstacle, so a solver keeps the system while [`Self::matches`] holds.
+pub struct DiffusionSystem {
+    unknown: Array3<bool>,
+    boundary: DiffusionBoundary,
+    a: Real,
+    problem: Problem,
+    stencil: FineStencil,
+    multigrid: Multigrid,
+    work: Workspace,
+}
+
+impl DiffusionSystem {
+    /// The system of [`solve_diffusion`]'s `unknown`, `boundary` and `a`.
+    pub fn new(
+        unknown: &Array3<bool>,
+        boundary: &DiffusionBoundary,
+        a: Real,
+    ) -> Result<Self, SolveError> {
+        if !(a >= 0.0 && a.is_finite()) {
+            return Err(SolveError::InvalidParameter {
+                name: "a (nu dt / dx^2)",
+                value: a,
+                allowed: "finite and not negative",
+            });
         }
-        let c = coordinates(&layout, idx);
-        let mut fixed = 0.0;
-        for axis in 0..3 {
-            for up in [false, true] {
-                if let Some(s) = layout.step(axis, c[axis], up) {
-                    let mut nb = c;
-                    nb[axis] = s;
-                    let j = layout.index(nb[0], nb[1], nb[2]);
-                    if problem.kinds[j] == DIRICHLET {
-                        fixed += old[j];
+        let d = unknown.dim();
+        let layout = Layout {
+            n: [d.0, d.1, d.2],
+            periodic: boundary.periodic,
+        };
+        let kinds: Vec<u8> = unknown
+            .iter()
+            .map(|&u| if u { FLUID } else { DIRICHLET })
+            .collect();
+        let side_weight = boundary
+            .sides
+            .map(|s| s.map(|s| if s == DiffusionSide::Mirror { 2 } else { 0 }));
+        let problem = Problem {
+            layout,
+            kinds,
+            side_weight,
+            shift: 1.0,
+            scale: a,
+        };
+        let dirichlet = problem.dirichlet_table();
+        let stencil = FineStencil::new(&problem, &dirichlet);
+        let multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
+        Ok(Self {
+            unknown: unknown.clone(),
+            boundary: *boundary,
+            a,
+            problem,
+            stencil,
+            multigrid,
+            work: Workspace::new(layout.len()),
+        })
+    }
+
+    /// Whether this is the system of `unknown`, `boundary` and `a` (bit for bit).
+    pub fn matches(&self, unknown: &Array3<bool>, boundary: &DiffusionBoundary, a: Real) -> bool {
+        self.a.to_bits() == a.to_bits() && self.boundary == *boundary && self.unknown == *unknown
+    }
+
+    /// Solves `(1 + a L) x_new = x_old` as [`solve_diffusion`] does; `x` is the initial guess.
+    pub fn solve(
+        &mut self,
+        x: &mut Array3<Real>,
+        settings: &SolverSettings,
+    ) -> Result<SolveStats, SolveError> {
+        let (problem, layout, a) = (&self.problem, self.problem.layout, self.a);
+        check_shape(&layout, "x", x)?;
+        check_settings(settings)?;
+        if let Some(idx) = x.iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                what: "x",
+                cell: coordinates(&layout, idx),
+            });
+        }
+        if a == 0.0 {
+            return Ok(SolveStats::default());
+        }
+        let work = &mut self.work;
+        load(&layout, "x", x, |i| problem.kinds[i] == FLUID, &mut work.x)?;
+        let old: Vec<f64> = x.iter().copied().collect();
+        // b = x_old + a * (sum of fixed neighbours) on the unknowns.
+        let rhs = |(idx, b): (usize, &mut f64)| {
+            if problem.kinds[idx] != FLUID {
+                return;
+            }
+            let c = coordinates(&layout, idx);
+            let mut fixed = 0.0;
+            for axis in 0..3 {
+                for up in [false, true] {
+                    if let Some(s) = layout.step(axis, c[axis], up) {
+                        let mut nb = c;
+                        nb[axis] = s;
+                        let j = layout.index(nb[0], nb[1], nb[2]);
+                        if problem.kinds[j] == DIRICHLET {
+                            fixed += old[j];
+                        }
                     }
                 }
             }
+            *b = old[idx] + a * fixed;
+        };
+        work.b.par_iter_mut().enumerate().for_each(rhs);
+        let stats = SolveStats {
+            levels: self.multigrid.depth(),
+            ..Default::default()
+        };
+        let b_norm = work.b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let result = if b_norm == 0.0 {
+            work.x.fill(0.0);
+            Ok(stats)
+        } else {
+            let o = pcg::solve(
+                &self.stencil,
+                &mut self.multigrid,
+                work,
+                b_norm,
+                settings.tolerance,
+                settings.max_iterations,
+            );
+            finish(o, stats)
+        };
+        for ((x, &v), &k) in x.iter_mut().zip(&work.x).zip(&problem.kinds) {
+            if k == FLUID {
+                *x = v;
+            }
         }
-        *b = old[idx] + a * fixed;
-    };
-    work.b.par_iter_mut().enumerate().for_each(rhs);
-    let stats = SolveStats {
-        levels: multigrid.depth(),
-        ..Default::default()
-    };
-    let b_norm = work.b.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let result = if b_norm == 0.0 {
-        work.x.fill(0.0);
-        Ok(stats)
-    } else {
-        let o = pcg::solve(
-            &stencil,
-            &mut multigrid,
-            &mut work,
-            b_norm,
-            settings.tolerance,
-            settings.max_iterations,
-        );
-        finish(o, stats)
-    };
-    for ((x, &v), &k) in x.iter_mut().zip(&work.x).zip(&problem.kinds) {
-        if k == FLUID {
-            *x = v;
-        }
+        result
     }
-    result
 }

@@ -26,7 +26,7 @@ pub mod vortex_coupling;
 
 pub use average::RunningAverage;
 pub use boundary::Boundaries;
-pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide};
+pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, DiffusionSystem};
 pub use interp::Stagger;
 pub use mac::MacGrid;
 pub use poisson::{

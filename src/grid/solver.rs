@@ -9,9 +9,10 @@ use ndarray::{Array3, Zip};
 use super::advect::{advect, advect_velocity};
 use super::average::RunningAverage;
 use super::boundary::Boundaries;
+use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, buoyancy, confinement};
 use super::mac::MacGrid;
-use super::poisson::{PoissonSystem, SolveError, SolverSettings};
+use super::poisson::{CellKind, PoissonSystem, SolveError, SolverSettings};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
 use crate::geometry::{GeometryError, RigidBody};
@@ -118,6 +119,11 @@ pub struct GridSolver {
     pub smoke: Option<SmokeState>,
     pub average: Option<(Real, RunningAverage)>,
     system: PoissonSystem,
+    /// The cell kinds `system` was built for: a moving obstacle whose cells stay the same
+    /// (a sphere spinning about its centre) keeps its hierarchy.
+    system_cells: Array3<CellKind>,
+    /// Each velocity component's viscosity system of the last step.
+    diffusion: [Option<DiffusionSystem>; 3],
     /// p dt / (rho dx) of the last projection: the next solve's warm start.
     scaled_pressure: Array3<Real>,
     settings: Settings,
@@ -175,7 +181,8 @@ impl GridSolver {
             .as_ref()
             .map(|s| smoke_state(&mac, grid, s))
             .transpose()?;
-        let system = PoissonSystem::new(&bounds.cell_kinds(), bounds.pressure_boundary());
+        let system_cells = bounds.cell_kinds();
+        let system = PoissonSystem::new(&system_cells, bounds.pressure_boundary());
         let average = grid
             .average_from
             .map(|start| (start, RunningAverage::new(&mac)));
@@ -188,6 +195,8 @@ impl GridSolver {
             smoke,
             average,
             system,
+            system_cells,
+            diffusion: Default::default(),
             settings,
             time: 0.0,
             step: 0,
@@ -219,6 +228,13 @@ impl GridSolver {
         self.project(1.0).map(|_| ())
     }
 
+    /// Sets the relative residual of the pressure and viscosity solves from the next step on
+    /// (the scene's `grid.pressure_tolerance` until then): a run can stabilise at a loose
+    /// tolerance and measure at a tight one.
+    pub fn set_solver_tolerance(&mut self, tolerance: Real) {
+        self.settings.pressure.tolerance = tolerance;
+    }
+
     /// Advances one step.
     pub fn advance(&mut self, dt_limit: Option<Real>) -> Result<GridStepStats, GridError> {
         let started = Instant::now();
@@ -232,8 +248,11 @@ impl GridSolver {
         if self.bodies.iter().any(RigidBody::is_moving) {
             let sides = self.bounds.sides;
             self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
-            self.system =
-                PoissonSystem::new(&self.bounds.cell_kinds(), self.bounds.pressure_boundary());
+            let cells = self.bounds.cell_kinds();
+            if cells != self.system_cells {
+                self.system = PoissonSystem::new(&cells, self.bounds.pressure_boundary());
+                self.system_cells = cells;
+            }
         }
 
         let t0 = Instant::now();
@@ -413,6 +432,7 @@ impl GridSolver {
                 self.settings.viscosity_scheme,
                 &mut self.mac.u[c],
                 &self.settings.pressure,
+                &mut self.diffusion[c],
             )
             .map_err(|source| self.solve_error("viscosity", source))?;
             iterations = iterations.max(stats.iterations);

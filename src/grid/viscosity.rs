@@ -5,17 +5,21 @@
 //! Crank–Nicolson needs no explicit operator: with y the backward-Euler solution over half the
 //! coefficient, (1 + a/2 L) y = u, the Crank–Nicolson value (1 + a/2 L)^-1 (1 - a/2 L) u is
 //! exactly 2 y - u.
+//!
+//! The caller keeps each component's [`DiffusionSystem`] between steps: it is rebuilt only when
+//! the unknown faces, the sides or `a` change.
 
 use ndarray::{Array3, Axis, Slice, Zip};
 
 use super::boundary::Boundaries;
-use super::diffusion::{solve_diffusion, DiffusionBoundary};
+use super::diffusion::{DiffusionBoundary, DiffusionSystem};
 use super::poisson::{SolveError, SolveStats, SolverSettings};
 use crate::scene::ViscosityScheme;
 use crate::Real;
 
 /// Diffuses component `c` of the faces over one step, a = nu dt / dx^2, with the fixed faces
-/// of `bounds` held.
+/// of `bounds` held; `system` is the component's system of the last call (None at first),
+/// reused when it still applies and replaced otherwise.
 pub fn diffuse_component(
     bounds: &Boundaries,
     c: usize,
@@ -23,12 +27,13 @@ pub fn diffuse_component(
     scheme: ViscosityScheme,
     u: &mut Array3<Real>,
     settings: &SolverSettings,
+    system: &mut Option<DiffusionSystem>,
 ) -> Result<SolveStats, SolveError> {
     match scheme {
-        ViscosityScheme::BackwardEuler => backward_euler(bounds, c, a, u, settings),
+        ViscosityScheme::BackwardEuler => backward_euler(bounds, c, a, u, settings, system),
         ViscosityScheme::CrankNicolson => {
             let old = u.clone();
-            let stats = backward_euler(bounds, c, 0.5 * a, u, settings)?;
+            let stats = backward_euler(bounds, c, 0.5 * a, u, settings, system)?;
             Zip::from(u)
                 .and(&old)
                 .par_for_each(|y, &u0| *y = 2.0 * *y - u0);
@@ -44,6 +49,7 @@ fn backward_euler(
     a: Real,
     u: &mut Array3<Real>,
     settings: &SolverSettings,
+    system: &mut Option<DiffusionSystem>,
 ) -> Result<SolveStats, SolveError> {
     let (boundary, wall) = bounds.diffusion_boundary(c);
     // A component that is zero everywhere, walls included (w of a 2-D run), stays zero.
@@ -57,14 +63,14 @@ fn backward_euler(
         let unknown = bounds.fixed[c]
             .slice_axis(Axis(c), Slice::from(..n))
             .mapv(|f| !f);
-        let stats = solve_with_walls(&unknown, &boundary, &wall, a, &mut period, settings)?;
+        let stats = solve_with_walls(&unknown, &boundary, &wall, a, &mut period, settings, system)?;
         u.slice_axis_mut(Axis(c), Slice::from(..n)).assign(&period);
         let first = period.index_axis(Axis(c), 0).to_owned();
         u.index_axis_mut(Axis(c), n).assign(&first);
         return Ok(stats);
     }
     let unknown = bounds.fixed[c].mapv(|f| !f);
-    solve_with_walls(&unknown, &boundary, &wall, a, u, settings)
+    solve_with_walls(&unknown, &boundary, &wall, a, u, settings, system)
 }
 
 /// The diffusion solve with the moving-wall correction of the right-hand side.
@@ -75,6 +81,7 @@ fn solve_with_walls(
     a: Real,
     u: &mut Array3<Real>,
     settings: &SolverSettings,
+    system: &mut Option<DiffusionSystem>,
 ) -> Result<SolveStats, SolveError> {
     for (axis, values) in wall.iter().enumerate() {
         let n = u.shape()[axis];
@@ -92,5 +99,9 @@ fn solve_with_walls(
                 });
         }
     }
-    solve_diffusion(unknown, boundary, a, u, settings)
+    let system = match system {
+        Some(s) if s.matches(unknown, boundary, a) => s,
+        _ => system.insert(DiffusionSystem::new(unknown, boundary, a)?),
+    };
+    system.solve(u, settings)
 }

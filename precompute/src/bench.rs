@@ -144,8 +144,8 @@ fn interpolation_error(name: &str, text: &str, args: &BenchArgs) -> anyhow::Resu
                     continue;
                 }
                 let sample = s.direction(row / s.azimuth, row % s.azimuth);
-                if !solved.contains_key(&row) {
-                    solved.insert(row, solve_at(&sample)?);
+                if let std::collections::hash_map::Entry::Vacant(e) = solved.entry(row) {
+                    e.insert(solve_at(&sample)?);
                 }
                 for (a, v) in approx.iter_mut().zip(&solved[&row]) {
                     *a += v * w;

@@ -86,6 +86,7 @@ impl Refiner for Mcvsph {
             return;
         }
         let ops = &ctx.ops;
+        let t0 = std::time::Instant::now();
         // Only the loss next to a vortex particle is used (Eq. 28), so the ideal vorticity is
         // needed on `reach`, and the vorticity one neighbourhood further (its Laplacian): at
         // 1 % vortex particles that skips two thirds of the curl and Laplacian work, with
@@ -94,7 +95,9 @@ impl Refiner for Mcvsph {
         let wider = ops.grow(&self.reach);
         let grad = ops.gradient_on(v, WallField::Velocity, Some(&wider));
         let omega: Vec<Vec3> = grad.par_iter().map(curl_of).collect();
+        let t1 = std::time::Instant::now();
         self.ideal = evolve_vorticity(ops, &omega, &grad, (ctx.nu, ctx.dt), Some(&self.reach));
+        eprintln!("PH before: grow+grad {:.2} evolve {:.2}", (t1-t0).as_secs_f64()*1e3, t1.elapsed().as_secs_f64()*1e3);
     }
 
     fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
@@ -102,6 +105,7 @@ impl Refiner for Mcvsph {
             return;
         }
         let ops = &ctx.ops;
+        let t0 = std::time::Instant::now();
         let now = ops.curl_on(v, WallField::Velocity, Some(&self.reach));
         let loss: Vec<Vec3> = self
             .ideal
@@ -123,6 +127,7 @@ impl Refiner for Mcvsph {
             })
             .collect();
         let sources: Vec<Vec3> = samples.iter().map(|&s| ops.nb.x[s]).collect();
+        let t1 = std::time::Instant::now();
         let correction = monte_carlo_biot_savart(
             ops.nb.x,
             &sources,
@@ -131,7 +136,9 @@ impl Refiner for Mcvsph {
             ctx.spacing,
             DEFAULT_THETA,
         );
+        let t2 = std::time::Instant::now();
         add_scaled(v, &correction, 1.0);
+        eprintln!("PH after: curl+smooth {:.2} bs {:.2} add {:.2}", (t1-t0).as_secs_f64()*1e3, (t2-t1).as_secs_f64()*1e3, t2.elapsed().as_secs_f64()*1e3);
     }
 }
 
@@ -162,6 +169,11 @@ pub fn monte_carlo_biot_savart(
     if theta == 0.0 || sources.len() < DIRECT_BELOW {
         biot_savart(targets, sources, &scaled, core)
     } else {
-        BiotSavartTree::new(sources, &scaled, core).evaluate(targets, theta)
+        let t0 = std::time::Instant::now();
+        let t = BiotSavartTree::new(sources, &scaled, core);
+        let t1 = std::time::Instant::now();
+        let r = t.evaluate(targets, theta);
+        eprintln!("PH tree: build {:.2} eval {:.2}", (t1-t0).as_secs_f64()*1e3, t1.elapsed().as_secs_f64()*1e3);
+        r
     }
 }

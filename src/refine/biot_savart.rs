@@ -99,22 +99,14 @@ impl Lanes {
     /// below the Monte Carlo error.
     fn sum_at(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.sum_at_avx2(p, d2) };
+        if simd::available() {
+            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+            return unsafe { simd::sum_at(&self.blocks, p, d2) };
         }
         self.sum_lanes(p, d2)
     }
 
-    /// [`Self::sum_lanes`] compiled for AVX2 (eight f32 lanes in one register).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn sum_at_avx2(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
-        self.sum_lanes(p, d2)
-    }
-
     /// The portable body of [`Self::sum_at`].
-    #[inline(always)]
     fn sum_lanes(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
         let (mut ux, mut uy, mut uz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
         for b in &self.blocks {
@@ -277,31 +269,48 @@ impl BiotSavartTree {
     pub fn evaluate(&self, targets: &[Vec3], theta: Real) -> Vec<Vec3> {
         let mut out = vec![Vec3::zeros(); targets.len()];
         if !self.nodes.is_empty() && !targets.is_empty() {
-            self.descend(targets, &mut out, &[0], theta, 0);
+            let finest = CLUSTERS[CLUSTERS.len() - 1];
+            let boxes: Vec<(Vec3, Vec3)> = targets
+                .par_chunks(finest)
+                .map(|t| bounds(t.iter().copied()))
+                .collect();
+            let cluster = Cluster {
+                targets,
+                boxes: &boxes,
+                depth: 0,
+            };
+            self.descend(cluster, &mut out, &[0], theta, None);
         }
         out
     }
 
-    /// Adds to `out` the field of the `candidates` nodes at the cluster `targets` at level
-    /// `depth` of the target hierarchy: nodes far from the whole cluster by its corners,
-    /// the rest handed down to the sub-clusters, or summed directly at the finest level.
+    /// Adds to `out` the field of the `candidates` nodes at `cluster`: nodes far from the
+    /// whole cluster at its box's corners, added to the far field `inherited` from the
+    /// enclosing cluster (trilinear, so restricting it to the sub-box by its corners is
+    /// exact) and interpolated to the targets once, where the hierarchy ends; the other
+    /// nodes are handed down to the sub-clusters, or summed directly at the finest level.
     fn descend(
         &self,
-        targets: &[Vec3],
+        cluster: Cluster,
         out: &mut [Vec3],
         candidates: &[usize],
         theta: Real,
-        depth: usize,
+        inherited: Option<&Field>,
     ) {
-        let finest = depth == CLUSTERS.len();
-        let (lo, hi) = bounds(targets.iter().copied());
+        let finest = cluster.depth == CLUSTERS.len();
+        let (lo, hi) = cluster.boxes.iter().fold(
+            (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN)),
+            |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
+        );
         let origin = 0.5 * (lo + hi);
         let reach = 0.5 * (hi - lo).norm();
         let (mut far, mut rest) = (Vec::new(), Vec::new());
         let mut stack = candidates.to_vec();
+        let theta2 = theta * theta;
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n];
-            if node.radius + reach < theta * (node.centre - origin).norm() {
+            let gap = node.radius + reach;
+            if gap * gap < theta2 * (node.centre - origin).norm_squared() {
                 far.push(n);
             } else if node.children > 0 && (finest || node.radius > reach) {
                 stack.extend(node.first_child..node.first_child + node.children);
@@ -309,9 +318,24 @@ impl BiotSavartTree {
                 rest.push(n);
             }
         }
-        let d2 = self.core * self.core;
+        let mut field = inherited.map(|f| f.restricted(lo, hi));
         if !far.is_empty() {
-            self.add_interpolated(targets, out, &far, (lo, hi));
+            let values = self.far_at_corners(&far, origin, 0.5 * (hi - lo));
+            field = Some(match field {
+                Some(f) => Field {
+                    values: std::array::from_fn(|c| f.values[c] + values[c]),
+                    ..f
+                },
+                None => Field { lo, hi, values },
+            });
+        }
+        let targets = cluster.targets;
+        if finest || rest.is_empty() {
+            if let Some(f) = &field {
+                for (u, p) in out.iter_mut().zip(targets) {
+                    *u += f.at(p);
+                }
+            }
         }
         if finest {
             let mut near = Lanes::default();
@@ -320,38 +344,24 @@ impl BiotSavartTree {
                     near.push(self.x[k] - origin, self.beta[k]);
                 }
             }
+            let d2 = (self.core * self.core) as f32;
             for (u, p) in out.iter_mut().zip(targets) {
-                *u += near.sum_at((p - origin).cast::<f32>(), d2 as f32) / (4.0 * PI);
+                *u += near.sum_at((p - origin).cast::<f32>(), d2) / (4.0 * PI);
             }
         } else if !rest.is_empty() {
-            out.par_chunks_mut(CLUSTERS[depth])
-                .zip(targets.par_chunks(CLUSTERS[depth]))
-                .for_each(|(u, t)| self.descend(t, u, &rest, theta, depth + 1));
-        }
-    }
-
-    /// Adds the field of the `far` nodes, evaluated at the eight corners of the box `(lo, hi)`
-    /// and interpolated trilinearly, to `out` at `targets` (inside the box).
-    fn add_interpolated(
-        &self,
-        targets: &[Vec3],
-        out: &mut [Vec3],
-        far: &[usize],
-        (lo, hi): (Vec3, Vec3),
-    ) {
-        let corners = self.far_at_corners(far, 0.5 * (lo + hi), 0.5 * (hi - lo));
-        let extent = hi - lo;
-        let fraction = |p: Real, lo: Real, e: Real| if e > 0.0 { (p - lo) / e } else { 0.0 };
-        for (u, p) in out.iter_mut().zip(targets) {
-            let t = Vec3::new(
-                fraction(p.x, lo.x, extent.x),
-                fraction(p.y, lo.y, extent.y),
-                fraction(p.z, lo.z, extent.z),
-            );
-            for (c, value) in corners.iter().enumerate() {
-                let w = |a: usize| if c >> a & 1 == 1 { t[a] } else { 1.0 - t[a] };
-                *u += (w(0) * w(1) * w(2)) * value;
-            }
+            let size = CLUSTERS[cluster.depth];
+            let per_box = size / CLUSTERS[CLUSTERS.len() - 1];
+            out.par_chunks_mut(size)
+                .zip(targets.par_chunks(size))
+                .zip(cluster.boxes.par_chunks(per_box))
+                .for_each(|((u, targets), boxes)| {
+                    let sub = Cluster {
+                        targets,
+                        boxes,
+                        depth: cluster.depth + 1,
+                    };
+                    self.descend(sub, u, &rest, theta, field.as_ref());
+                });
         }
     }
 
@@ -363,23 +373,15 @@ impl BiotSavartTree {
     /// centre; relative accuracy about 1e-6, like the near field.
     fn far_at_corners(&self, far: &[usize], origin: Vec3, half: Vec3) -> [Vec3; 8] {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.far_at_corners_avx2(far, origin, half) };
+        if simd::available() {
+            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+            return unsafe { simd::far_at_corners(self, far, origin, half) };
         }
-        self.far_corner_lanes(far, origin, half)
-    }
-
-    /// [`Self::far_corner_lanes`] compiled for AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn far_at_corners_avx2(&self, far: &[usize], origin: Vec3, half: Vec3) -> [Vec3; 8] {
         self.far_corner_lanes(far, origin, half)
     }
 
     /// The portable body of [`Self::far_at_corners`]: with y = x - c and
     /// s^2 = |y|^2 + d^2, u = (B x y - a) / s^3 + 3 (M y) x y / s^5 (module documentation).
-    #[inline(always)]
     fn far_corner_lanes(&self, far: &[usize], origin: Vec3, half: Vec3) -> [Vec3; 8] {
         let side = |c: usize, axis: usize| {
             let h = half[axis] as f32;
@@ -418,6 +420,185 @@ impl BiotSavartTree {
         std::array::from_fn(|c| {
             Vec3::new(Real::from(ux[c]), Real::from(uy[c]), Real::from(uz[c])) / (4.0 * PI)
         })
+    }
+}
+
+/// The two inner loops on AVX2 and FMA: eight f32 lanes, and 1 / s^3 from the reciprocal
+/// square root estimate refined by one Newton step (relative error about 1e-7, like f32
+/// rounding) instead of a square root and a division, which would take most of the time.
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use super::{BiotSavartTree, Block, Moments, Real, Vec3, PI};
+    use nalgebra::Vector3;
+    use std::arch::x86_64::*;
+
+    /// Whether the CPU runs [`sum_at`] and [`far_at_corners`].
+    pub fn available() -> bool {
+        is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
+    }
+
+    /// 1 / sqrt(r2), lane by lane: the hardware estimate (12 bits) and one Newton step.
+    #[inline(always)]
+    unsafe fn rsqrt(r2: __m256) -> __m256 {
+        let y = _mm256_rsqrt_ps(r2);
+        let half_r2 = _mm256_mul_ps(_mm256_set1_ps(0.5), r2);
+        let correction = _mm256_fnmadd_ps(half_r2, _mm256_mul_ps(y, y), _mm256_set1_ps(1.5));
+        _mm256_mul_ps(y, correction)
+    }
+
+    /// The eight lanes of `v` added up in f64.
+    #[inline(always)]
+    unsafe fn total(v: __m256) -> Real {
+        let mut lanes = [0f32; 8];
+        _mm256_storeu_ps(lanes.as_mut_ptr(), v);
+        lanes.iter().map(|&x| Real::from(x)).sum()
+    }
+
+    /// `Lanes::sum_at`: sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2).
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn sum_at(blocks: &[Block], p: Vector3<f32>, d2: f32) -> Vec3 {
+        let (px, py, pz) = (
+            _mm256_set1_ps(p.x),
+            _mm256_set1_ps(p.y),
+            _mm256_set1_ps(p.z),
+        );
+        let d2 = _mm256_set1_ps(d2);
+        let (mut ux, mut uy, mut uz) = (
+            _mm256_setzero_ps(),
+            _mm256_setzero_ps(),
+            _mm256_setzero_ps(),
+        );
+        for b in blocks {
+            let dx = _mm256_sub_ps(px, _mm256_loadu_ps(b.x.as_ptr()));
+            let dy = _mm256_sub_ps(py, _mm256_loadu_ps(b.y.as_ptr()));
+            let dz = _mm256_sub_ps(pz, _mm256_loadu_ps(b.z.as_ptr()));
+            let r2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_fmadd_ps(dz, dz, d2)));
+            let y = rsqrt(r2);
+            let inv = _mm256_mul_ps(y, _mm256_mul_ps(y, y));
+            let bx = _mm256_loadu_ps(b.bx.as_ptr());
+            let by = _mm256_loadu_ps(b.by.as_ptr());
+            let bz = _mm256_loadu_ps(b.bz.as_ptr());
+            ux = _mm256_fmadd_ps(_mm256_fmsub_ps(by, dz, _mm256_mul_ps(bz, dy)), inv, ux);
+            uy = _mm256_fmadd_ps(_mm256_fmsub_ps(bz, dx, _mm256_mul_ps(bx, dz)), inv, uy);
+            uz = _mm256_fmadd_ps(_mm256_fmsub_ps(bx, dy, _mm256_mul_ps(by, dx)), inv, uz);
+        }
+        Vec3::new(total(ux), total(uy), total(uz))
+    }
+
+    /// `BiotSavartTree::far_at_corners`, one corner per lane.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn far_at_corners(
+        tree: &BiotSavartTree,
+        far: &[usize],
+        origin: Vec3,
+        half: Vec3,
+    ) -> [Vec3; 8] {
+        let side = |axis: usize| {
+            let h = half[axis] as f32;
+            let lanes: [f32; 8] = std::array::from_fn(|c| if c >> axis & 1 == 1 { h } else { -h });
+            _mm256_loadu_ps(lanes.as_ptr())
+        };
+        let (cx, cy, cz) = (side(0), side(1), side(2));
+        let d2 = _mm256_set1_ps((tree.core * tree.core) as f32);
+        let (mut ux, mut uy, mut uz) = (
+            _mm256_setzero_ps(),
+            _mm256_setzero_ps(),
+            _mm256_setzero_ps(),
+        );
+        for &n in far {
+            let node = &tree.nodes[n];
+            let c = (node.centre - origin).cast::<f32>();
+            let Moments {
+                total: b,
+                twist: a,
+                moment: m,
+            } = node.moments;
+            let s = _mm256_set1_ps;
+            let yx = _mm256_sub_ps(cx, s(c.x));
+            let yy = _mm256_sub_ps(cy, s(c.y));
+            let yz = _mm256_sub_ps(cz, s(c.z));
+            let s2 = _mm256_fmadd_ps(yx, yx, _mm256_fmadd_ps(yy, yy, _mm256_fmadd_ps(yz, yz, d2)));
+            let r = rsqrt(s2);
+            let r2 = _mm256_mul_ps(r, r);
+            let inv3 = _mm256_mul_ps(r, r2);
+            let inv5 = _mm256_mul_ps(_mm256_mul_ps(s(3.0), inv3), r2);
+            let row = |i: usize| {
+                _mm256_fmadd_ps(
+                    s(m[i]),
+                    yx,
+                    _mm256_fmadd_ps(s(m[i + 1]), yy, _mm256_mul_ps(s(m[i + 2]), yz)),
+                )
+            };
+            let (mx, my, mz) = (row(0), row(3), row(6));
+            // (B x y - a) / s^3 + 3 (M y) x y / s^5, one component.
+            let comp =
+                |b1: f32, y2: __m256, b2: f32, y1: __m256, a0: f32, m1: __m256, m2: __m256| {
+                    let mono =
+                        _mm256_sub_ps(_mm256_fmsub_ps(s(b1), y2, _mm256_mul_ps(s(b2), y1)), s(a0));
+                    let dip = _mm256_fmsub_ps(m1, y2, _mm256_mul_ps(m2, y1));
+                    _mm256_fmadd_ps(mono, inv3, _mm256_mul_ps(dip, inv5))
+                };
+            ux = _mm256_add_ps(ux, comp(b[1], yz, b[2], yy, a[0], my, mz));
+            uy = _mm256_add_ps(uy, comp(b[2], yx, b[0], yz, a[1], mz, mx));
+            uz = _mm256_add_ps(uz, comp(b[0], yy, b[1], yx, a[2], mx, my));
+        }
+        let lanes = |v: __m256| {
+            let mut l = [0f32; 8];
+            _mm256_storeu_ps(l.as_mut_ptr(), v);
+            l
+        };
+        let (ux, uy, uz) = (lanes(ux), lanes(uy), lanes(uz));
+        std::array::from_fn(|c| {
+            Vec3::new(Real::from(ux[c]), Real::from(uy[c]), Real::from(uz[c])) / (4.0 * PI)
+        })
+    }
+}
+
+/// Consecutive targets at one level of the target hierarchy, with the bounding boxes of
+/// their finest-level clusters (computed once; a cluster's box is their union).
+#[derive(Clone, Copy)]
+struct Cluster<'a> {
+    targets: &'a [Vec3],
+    boxes: &'a [(Vec3, Vec3)],
+    /// Level: the cluster holds `CLUSTERS[depth - 1]` targets (all of them at 0).
+    depth: usize,
+}
+
+/// The far field over a box, trilinear between its values at the eight corners (corner c has
+/// bit a set for the upper side along axis a).
+struct Field {
+    lo: Vec3,
+    hi: Vec3,
+    values: [Vec3; 8],
+}
+
+impl Field {
+    /// The interpolated field at `p` (inside the box).
+    fn at(&self, p: &Vec3) -> Vec3 {
+        let extent = self.hi - self.lo;
+        let fraction = |a: usize| {
+            if extent[a] > 0.0 {
+                (p[a] - self.lo[a]) / extent[a]
+            } else {
+                0.0
+            }
+        };
+        let t = Vec3::new(fraction(0), fraction(1), fraction(2));
+        let mut u = Vec3::zeros();
+        for (c, value) in self.values.iter().enumerate() {
+            let w = |a: usize| if c >> a & 1 == 1 { t[a] } else { 1.0 - t[a] };
+            u += (w(0) * w(1) * w(2)) * value;
+        }
+        u
+    }
+
+    /// The same field on the sub-box `(lo, hi)`, by its values there.
+    fn restricted(&self, lo: Vec3, hi: Vec3) -> Field {
+        let values = std::array::from_fn(|c| {
+            let pick = |a: usize| if c >> a & 1 == 1 { hi[a] } else { lo[a] };
+            self.at(&Vec3::new(pick(0), pick(1), pick(2)))
+        });
+        Field { lo, hi, values }
     }
 }
 

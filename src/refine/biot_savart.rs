@@ -22,7 +22,12 @@
 //!   itself); a node that is neither far nor larger than the cluster is handed down to the
 //!   sub-clusters, and at the finest level near leaves are summed directly, per target, with
 //!   the exact mollified kernel. The coarse levels take the distant nodes, so the corner
-//!   evaluations per target stay few.
+//!   evaluations per target stay few. A cluster's far field is handed down to its
+//!   sub-clusters as its values at their corners (restricting a trilinear field to a sub-box
+//!   is exact), so each target is interpolated once, at the level where its descent ends.
+//! - both inner loops (near sources per target, far nodes per eight corners) run in f32
+//!   lanes, on AVX2 and FMA where the CPU has them (module `simd`); at 91k fluid particles
+//!   and 911 vortex particles the near field is about half the work.
 //!
 //! The error is O(theta^2) relative to each far node's contribution and vanishes as
 //! theta -> 0 (at theta = 0 every pair is direct); `tests/refine_operators.rs` checks both.
@@ -608,4 +613,59 @@ fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
         (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN)),
         |(lo, hi), p| (lo.inf(&p), hi.sup(&p)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Random sources in a cube of side 2 around the origin, with strengths of both signs.
+    fn sources(count: usize) -> (Vec<Vec3>, Vec<Vec3>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut point = || {
+            Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+        };
+        let x = (0..count).map(|_| point()).collect();
+        let b = (0..count).map(|_| point()).collect();
+        (x, b)
+    }
+
+    /// The dispatched near-field sum (SIMD where the CPU has it) equals the portable loop to
+    /// f32 rounding: the Newton-refined reciprocal square root costs no accuracy.
+    #[test]
+    fn near_field_lanes_agree() {
+        let (x, b) = sources(37);
+        let mut lanes = Lanes::default();
+        for (x, b) in x.iter().zip(&b) {
+            lanes.push(*x, *b);
+        }
+        for p in [Vec3::new(0.1, -0.3, 0.2), Vec3::new(2.0, 1.0, -1.5)] {
+            let p = p.cast::<f32>();
+            let (fast, portable) = (lanes.sum_at(p, 1e-3), lanes.sum_lanes(p, 1e-3));
+            assert!(
+                (fast - portable).norm() < 1e-5 * portable.norm(),
+                "{fast} vs {portable}"
+            );
+        }
+    }
+
+    /// The same for the far field at a box's eight corners, from every node of a tree.
+    #[test]
+    fn far_field_lanes_agree() {
+        let (x, b) = sources(300);
+        let tree = BiotSavartTree::new(&x, &b, 0.01);
+        let nodes: Vec<usize> = (1..tree.nodes.len()).collect();
+        let (origin, half) = (Vec3::new(4.0, 0.5, -3.0), Vec3::new(0.2, 0.1, 0.3));
+        let fast = tree.far_at_corners(&nodes, origin, half);
+        let portable = tree.far_corner_lanes(&nodes, origin, half);
+        for (f, p) in fast.iter().zip(&portable) {
+            assert!((f - p).norm() < 1e-5 * p.norm(), "{f} vs {p}");
+        }
+    }
 }

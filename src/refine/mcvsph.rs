@@ -162,10 +162,10 @@ impl Refiner for Mcvsph {
     }
 }
 
-/// Below this many vortex particles the direct sum is cheaper than the treecode (measured
-/// on the dam break: 197 sources, 3.0 ms direct against 4.3 ms by the tree; 850 sources,
-/// 45 ms against 27 ms), and exact.
-pub const DIRECT_BELOW: usize = 512;
+/// Below this many vortex particles the direct sum is cheaper than the treecode, and exact
+/// (instructions on the dam-break vorticity at 1 %: 220 sources, 20.5 M direct against
+/// 20.4 M by the tree; 467 sources, 84 M against 54 M).
+pub const DIRECT_BELOW: usize = 256;
 
 /// The Monte Carlo estimate (Ye Eq. 26, P_k = 1 / N_f) of the velocity that a population of
 /// `population` vortex particles induces at `targets`, from a uniform sample of them at

@@ -267,7 +267,7 @@ fn treecode_converges_to_the_direct_sum() {
     let beta: Vec<Vec3> = (0..3000)
         .map(|_| Vec3::new(0.0, 0.0, 1.0) + 0.5 * point(1.0))
         .collect();
-    // Fluid-like targets: a lattice in Morton order (the solver's order), as clusters expect.
+    // Fluid-like targets: a lattice, in the solver's cell order.
     let lattice: Vec<Vec3> = (0..40_000)
         .map(|k| Vec3::new((k % 40) as Real, (k / 40 % 40) as Real, (k / 1600) as Real))
         .map(|p| p * 0.03 - Vec3::repeat(0.6))
@@ -304,4 +304,11 @@ fn treecode_converges_to_the_direct_sum() {
     }
     assert!(error(DEFAULT_THETA) < 0.01, "default theta");
     assert!(error(0.0) < 1e-5, "theta = 0: {:.2e}", error(0.0));
+    // The tree groups the targets itself: their order changes nothing.
+    let reversed: Vec<Vec3> = targets.iter().rev().copied().collect();
+    let forward = tree.evaluate(&targets, DEFAULT_THETA);
+    let backward = tree.evaluate(&reversed, DEFAULT_THETA);
+    for (a, b) in forward.iter().zip(backward.iter().rev()) {
+        assert!((a - b).norm() <= 1e-12 * a.norm(), "{a} vs {b}");
+    }
 }

@@ -14,8 +14,8 @@
 //!   g(y - delta) = g(y) - J(y) delta gives
 //!   u(x) = (B x y / s^3 - a / s^3 + 3 (M y) x y / s^5) / (4 pi) + O((R / |y|)^2),
 //!   R the node's radius about c;
-//! - targets in a hierarchy of clusters of consecutive particles (4096, 512, 128; the fluid is
-//!   in Morton order, so a cluster is compact). A node is far from a cluster when
+//! - targets in an octree of clusters (`super::clusters`: cubes of about five particle
+//!   spacings, about 125 targets, and their parents). A node is far from a cluster when
 //!   R + r < theta |c - o|, with o and r the centre and half-diagonal of the cluster's bounding
 //!   box. Far nodes are evaluated at the box's eight corners and interpolated trilinearly to
 //!   each target (second-order error, (r / |y|)^2 <= theta^2 relative, like the expansion
@@ -32,23 +32,18 @@
 //! The error is O(theta^2) relative to each far node's contribution and vanishes as
 //! theta -> 0 (at theta = 0 every pair is direct); `tests/refine_operators.rs` checks both.
 
+use super::clusters::{bounds, Clusters};
 use crate::sph::operators::Mat3;
 use crate::{Real, Vec3};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// Default opening parameter: on the dam-break vorticity at 1 % and 3 % vortex particles the
-/// tree differs from the direct sum by under 1 % RMS of the signal (README, "Refinement
-/// benchmarks"), a hundred times below the Monte Carlo error at those samples; 0.5 doubles
-/// that error for a quarter less time.
-pub const DEFAULT_THETA: Real = 0.4;
-
-/// Targets per cluster at each level of the target hierarchy, coarse to fine (consecutive
-/// targets in Morton order; the finest holds a few neighbourhoods). With the near field on
-/// AVX2, 128 at the finest level was cheaper than 64 or 32 (fewer corner evaluations) and
-/// as accurate.
-const CLUSTERS: [usize; 3] = [4096, 512, 128];
+/// Default opening parameter: on the dam-break vorticity at 1 % vortex particles the tree
+/// differs from the direct sum by 0.6 % RMS of the signal at 91k fluid particles and 0.9 % at
+/// 389k (`eddy bench --mcvsph-error` prints it), a hundred times below the Monte Carlo error;
+/// 0.4 takes a sixth less time for 1.5 times that error, 0.3 a third more for 0.6 times it.
+pub const DEFAULT_THETA: Real = 0.35;
 
 /// Most sources in a leaf of the octree.
 const LEAF: usize = 4;
@@ -272,41 +267,36 @@ impl BiotSavartTree {
     /// The velocity the sources induce at every target, with opening parameter `theta`
     /// (0 sums every pair directly).
     pub fn evaluate(&self, targets: &[Vec3], theta: Real) -> Vec<Vec3> {
+        if self.nodes.is_empty() || targets.is_empty() {
+            return vec![Vec3::zeros(); targets.len()];
+        }
+        let clusters = Clusters::new(targets, self.core);
+        let mut sorted = vec![Vec3::zeros(); targets.len()];
+        self.descend(&clusters, 0, &mut sorted, &[0], theta, None);
         let mut out = vec![Vec3::zeros(); targets.len()];
-        if !self.nodes.is_empty() && !targets.is_empty() {
-            let finest = CLUSTERS[CLUSTERS.len() - 1];
-            let boxes: Vec<(Vec3, Vec3)> = targets
-                .par_chunks(finest)
-                .map(|t| bounds(t.iter().copied()))
-                .collect();
-            let cluster = Cluster {
-                targets,
-                boxes: &boxes,
-                depth: 0,
-            };
-            self.descend(cluster, &mut out, &[0], theta, None);
+        for (&k, u) in clusters.order.iter().zip(sorted) {
+            out[k] = u;
         }
         out
     }
 
-    /// Adds to `out` the field of the `candidates` nodes at `cluster`: nodes far from the
-    /// whole cluster at its box's corners, added to the far field `inherited` from the
-    /// enclosing cluster (trilinear, so restricting it to the sub-box by its corners is
-    /// exact) and interpolated to the targets once, where the hierarchy ends; the other
+    /// Adds to `out` (the targets of cluster `c`) the field of the `candidates` nodes: nodes
+    /// far from the whole cluster at its box's corners, added to the far field `inherited`
+    /// from the enclosing cluster (trilinear, so restricting it to the sub-box by its corners
+    /// is exact) and interpolated to the targets once, where the hierarchy ends; the other
     /// nodes are handed down to the sub-clusters, or summed directly at the finest level.
     fn descend(
         &self,
-        cluster: Cluster,
+        clusters: &Clusters,
+        c: usize,
         out: &mut [Vec3],
         candidates: &[usize],
         theta: Real,
         inherited: Option<&Field>,
     ) {
-        let finest = cluster.depth == CLUSTERS.len();
-        let (lo, hi) = cluster.boxes.iter().fold(
-            (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN)),
-            |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
-        );
+        let cluster = &clusters.nodes[c];
+        let finest = cluster.children.is_empty();
+        let (lo, hi) = (cluster.lo, cluster.hi);
         let origin = 0.5 * (lo + hi);
         let reach = 0.5 * (hi - lo).norm();
         let (mut far, mut rest) = (Vec::new(), Vec::new());
@@ -334,7 +324,7 @@ impl BiotSavartTree {
                 None => Field { lo, hi, values },
             });
         }
-        let targets = cluster.targets;
+        let targets = &clusters.x[cluster.targets.clone()];
         if finest || rest.is_empty() {
             if let Some(f) = &field {
                 for (u, p) in out.iter_mut().zip(targets) {
@@ -354,19 +344,17 @@ impl BiotSavartTree {
                 *u += near.sum_at((p - origin).cast::<f32>(), d2) / (4.0 * PI);
             }
         } else if !rest.is_empty() {
-            let size = CLUSTERS[cluster.depth];
-            let per_box = size / CLUSTERS[CLUSTERS.len() - 1];
-            out.par_chunks_mut(size)
-                .zip(targets.par_chunks(size))
-                .zip(cluster.boxes.par_chunks(per_box))
-                .for_each(|((u, targets), boxes)| {
-                    let sub = Cluster {
-                        targets,
-                        boxes,
-                        depth: cluster.depth + 1,
-                    };
-                    self.descend(sub, u, &rest, theta, field.as_ref());
-                });
+            // The sub-clusters cover the cluster's targets in order.
+            let mut parts = Vec::with_capacity(cluster.children.len());
+            let mut tail = out;
+            for &child in &cluster.children {
+                let (part, more) = tail.split_at_mut(clusters.nodes[child].targets.len());
+                parts.push((child, part));
+                tail = more;
+            }
+            parts.into_par_iter().for_each(|(child, part)| {
+                self.descend(clusters, child, part, &rest, theta, field.as_ref())
+            });
         }
     }
 
@@ -559,16 +547,6 @@ mod simd {
     }
 }
 
-/// Consecutive targets at one level of the target hierarchy, with the bounding boxes of
-/// their finest-level clusters (computed once; a cluster's box is their union).
-#[derive(Clone, Copy)]
-struct Cluster<'a> {
-    targets: &'a [Vec3],
-    boxes: &'a [(Vec3, Vec3)],
-    /// Level: the cluster holds `CLUSTERS[depth - 1]` targets (all of them at 0).
-    depth: usize,
-}
-
 /// The far field over a box, trilinear between its values at the eight corners (corner c has
 /// bit a set for the upper side along axis a).
 struct Field {
@@ -605,14 +583,6 @@ impl Field {
         });
         Field { lo, hi, values }
     }
-}
-
-/// Componentwise bounding box of `points` (at least one).
-fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
-    points.fold(
-        (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN)),
-        |(lo, hi), p| (lo.inf(&p), hi.sup(&p)),
-    )
 }
 
 #[cfg(test)]

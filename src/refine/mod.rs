@@ -14,6 +14,7 @@
 
 pub mod bench;
 pub mod biot_savart;
+mod clusters;
 pub mod confinement;
 pub mod mcvsph;
 pub mod micropolar;

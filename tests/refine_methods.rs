@@ -117,7 +117,7 @@ fn load_error(refinement: &str) -> String {
 /// the file, the key, the value and what is allowed.
 #[test]
 fn bad_refinement_parameters_give_clear_errors() {
-    let cases: [(&str, &[&str]); 8] = [
+    let cases: [(&str, &[&str]); 9] = [
         (
             "method = \"rankine\"\nbeta = 1.5",
             &["bad.toml", "refinement.beta", "1.5", "[0, 1]", "rankine"],
@@ -133,6 +133,10 @@ fn bad_refinement_parameters_give_clear_errors() {
         (
             "method = \"mcvsph\"\nvolume_coefficient = 1.0",
             &["refinement.volume_coefficient", "[0, 1)"],
+        ),
+        (
+            "method = \"mcvsph\"\ntheta = 1.0",
+            &["refinement.theta", "[0, 1)"],
         ),
         (
             "method = \"micropolar\"\nmicro_inertia = 0.0",
@@ -176,6 +180,7 @@ fn bad_refinement_parameters_give_clear_errors() {
             Refinement::Mcvsph {
                 sample_fraction: 0.01,
                 volume_coefficient: 0.05,
+                theta: eddy::refine::biot_savart::DEFAULT_THETA,
                 walls: false,
             },
         ),

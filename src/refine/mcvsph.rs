@@ -26,7 +26,8 @@
 //! 1 / (6 sqrt(3) pi d^2) |beta|, and K_d(0) = 0, so the k = i term vanishes by itself.
 //!
 //! **Far field.** The sum over the N vortex particles at all N_f fluid particles is evaluated
-//! by the treecode of `super::biot_savart` at its default opening parameter, O(N_f log N)
+//! by the treecode of `super::biot_savart` (opening parameter `theta` of the scene, default
+//! `super::biot_savart::DEFAULT_THETA`), O(N_f log N)
 //! instead of O(N_f N) (directly below [`DIRECT_BELOW`] vortex particles, where that is
 //! cheaper); its error is a small fraction of the Monte Carlo error.
 
@@ -38,12 +39,14 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use super::biot_savart::{biot_savart, BiotSavartTree};
 use super::vrsph::evolve_vorticity;
 
 /// MCVSPH state.
 pub struct Mcvsph {
     volume_coefficient: Real,
+    /// Opening parameter of the Biot–Savart treecode.
+    theta: Real,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
     /// The ideal vorticity omega^(n+1) of the current step (on `reach` only).
@@ -54,8 +57,9 @@ pub struct Mcvsph {
 }
 
 impl Mcvsph {
-    /// Draws round(`fraction` n) vortex particles (at least one) among `n` fluid particles.
-    pub fn new(n: usize, fraction: Real, volume_coefficient: Real, seed: u64) -> Self {
+    /// Draws round(`fraction` n) vortex particles (at least one) among `n` fluid particles;
+    /// `theta` is the treecode's opening parameter.
+    pub fn new(n: usize, fraction: Real, volume_coefficient: Real, theta: Real, seed: u64) -> Self {
         let count = ((fraction * n as Real).round() as usize).clamp(1.min(n), n);
         let mut sampled = vec![false; n];
         for i in sample_indices(n, count, seed) {
@@ -63,6 +67,7 @@ impl Mcvsph {
         }
         Self {
             volume_coefficient,
+            theta,
             sampled,
             ideal: Vec::new(),
             reach: Vec::new(),
@@ -150,14 +155,8 @@ impl Refiner for Mcvsph {
             })
             .collect();
         let sources: Vec<Vec3> = samples.iter().map(|&s| ops.nb.x[s]).collect();
-        let correction = monte_carlo_biot_savart(
-            ops.nb.x,
-            &sources,
-            &beta,
-            v.len(),
-            ctx.spacing,
-            DEFAULT_THETA,
-        );
+        let correction =
+            monte_carlo_biot_savart(ops.nb.x, &sources, &beta, v.len(), ctx.spacing, self.theta);
         add_scaled(v, &correction, 1.0);
     }
 }

@@ -70,11 +70,13 @@ pub fn build(cfg: &Refinement, n: usize, seed: u64) -> Option<Box<dyn Refiner>> 
         Refinement::Mcvsph {
             sample_fraction,
             volume_coefficient,
+            theta,
             ..
         } => Box::new(mcvsph::Mcvsph::new(
             n,
             sample_fraction,
             volume_coefficient,
+            theta,
             seed,
         )),
         Refinement::Micropolar {

@@ -112,14 +112,9 @@ impl Clusters {
     /// octant digit at `shift` and below.
     fn build(&mut self, n: usize, cubes: &[(u64, Range<usize>)], shift: u32) {
         let targets = cubes[0].1.start..cubes[cubes.len() - 1].1.end;
-        let (lo, hi) = bounds(self.x[targets.clone()].iter().copied());
-        self.nodes[n] = Cluster {
-            targets: targets.clone(),
-            lo,
-            hi,
-            children: Vec::new(),
-        };
+        self.nodes[n].targets = targets.clone();
         if cubes.len() == 1 || targets.len() <= MERGE_BELOW {
+            (self.nodes[n].lo, self.nodes[n].hi) = bounds(self.x[targets].iter().copied());
             return;
         }
         // The first digit, from `shift` down, at which the cubes differ (they are distinct).
@@ -128,6 +123,7 @@ impl Clusters {
         while digit(cubes[0].0, s) == digit(cubes[cubes.len() - 1].0, s) {
             s -= 3;
         }
+        let (mut lo, mut hi) = (Vec3::repeat(Real::MAX), Vec3::repeat(Real::MIN));
         let mut first = 0;
         while first < cubes.len() {
             let d = digit(cubes[first].0, s);
@@ -141,8 +137,11 @@ impl Clusters {
             });
             self.nodes[n].children.push(child);
             self.build(child, &cubes[first..first + len], s.saturating_sub(3));
+            lo = lo.inf(&self.nodes[child].lo);
+            hi = hi.sup(&self.nodes[child].hi);
             first += len;
         }
+        (self.nodes[n].lo, self.nodes[n].hi) = (lo, hi);
     }
 }
 

@@ -133,6 +133,10 @@ pub fn stream_core(volume: Real) -> Real {
 
 /// The local stream function (Liu Eq. 15) of the vorticity `zeta`:
 /// psi_i = 1 / (4 pi) sum_{j in N(i) + i} zeta_j V_j / sqrt(|x_ij|^2 + e^2).
+///
+/// The weight 1 / sqrt(...) is taken in f32: an f64 square root and division cost more than the
+/// rest of the pass, and f32's rounding (6e-8) matches that of the cached kernel gradients
+/// the other passes read.
 pub fn stream_function(ops: &Operators, zeta: &[Vec3]) -> Vec<Vec3> {
     let e = stream_core(ops.nb.volume);
     let e2 = (e * e) as f32;

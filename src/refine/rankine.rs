@@ -85,7 +85,9 @@ impl Refiner for Rankine {
                 let dv = induced_velocity(&ctx.ops.nb, &lost, rc);
                 add_scaled(v, &dv, 1.0);
                 // curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
-                add_scaled(&mut omega, &ctx.ops.curl(&dv, WallField::Zero), 1.0);
+                omega.par_iter_mut().enumerate().for_each(|(i, w)| {
+                    *w += ctx.ops.curl_at(i, &dv, WallField::Zero);
+                });
             }
         }
         self.previous = Some(omega);

@@ -1,14 +1,22 @@
 //! Vorticity refinement (VRSPH, Liu et al. 2021, Algorithm 2, Eqs. 5–17).
 //!
-//! At the point after the divergence solve, where the velocity is the papers' v~ (Eq. 12):
+//! At the point after the divergence solve, where the velocity is the papers' v~ (Eq. 12),
+//! in the order of Algorithm 2:
 //!
-//! 1. zeta~ = curl v~ (Eq. 6, from the shared gradient tensor);
-//! 2. the loss Delta zeta = zeta^(n+1) - zeta~ (Eq. 12), with zeta^(n+1) the ideal vorticity
-//!    carried from the last step by the vorticity equation (Eqs. 7–11);
+//! 1. zeta~ = curl v~ (Eq. 6) and the ideal vorticity zeta^(n+1) = zeta^n + dt (zeta^n . grad
+//!    v^n + nu Laplacian zeta^n) (Eqs. 7–11), from the zeta^n and stretching the particles carry
+//!    from the end of the last step; the Laplacian is taken at this step's positions, where
+//!    Algorithm 2 evaluates D zeta^n / Dt (after "correct divergence"), in the same pass as
+//!    zeta~;
+//! 2. the loss Delta zeta = zeta^(n+1) - zeta~ (Eq. 12);
 //! 3. the local stream function psi (Eq. 15) and the refinement Delta v = curl psi (Eq. 16);
 //! 4. v^(n+1) = v~ + alpha Delta v (Eq. 17);
-//! 5. zeta^(n+1) = curl v^(n+1) and its ideal successor
-//!    zeta^(n+1) + dt (zeta . grad v + nu Laplacian zeta) for the next step (Eqs. 7–10).
+//! 5. zeta^n of the next step, curl v^(n+1), and its stretching (zeta . grad) v^(n+1) (Eq. 9),
+//!    from one gradient pass (Algorithm 2's first line, at the positions where v^(n+1) is
+//!    formed).
+//!
+//! Four passes over the neighbours a step: the gradient, the fused curl and Laplacian, the
+//! stream function and its curl.
 //!
 //! **Regularised distance in Eq. 15.** The sum runs over the fluid neighbours within the
 //! support and the particle itself, with |x_ij| replaced by sqrt(|x_ij|^2 + e^2),
@@ -27,7 +35,7 @@
 //! nu = 0 the same vortex gains energy under VRSPH (+30 % in 125 steps, where DFSPH keeps it
 //! within 0.1 %), the over-restoration at the particle scale.
 
-use super::{add_scaled, Refiner, StepContext};
+use super::{Refiner, StepContext};
 use crate::sph::neighbors::permute;
 use crate::sph::operators::{curl_of, per_particle, Mat3, Operators, WallField};
 use crate::{Real, Vec3};
@@ -37,20 +45,27 @@ use std::f64::consts::PI;
 /// VRSPH with gain alpha.
 pub struct Vrsph {
     alpha: Real,
-    /// The ideal vorticity zeta^(n+1) per fluid particle; None before the first step.
-    ideal: Option<Vec<Vec3>>,
+    /// zeta^n = curl v^n per fluid particle; empty before the first step.
+    zeta: Vec<Vec3>,
+    /// The stretching (zeta^n . grad) v^n per fluid particle.
+    stretch: Vec<Vec3>,
 }
 
 impl Vrsph {
     pub fn new(alpha: Real) -> Self {
-        Self { alpha, ideal: None }
+        Self {
+            alpha,
+            zeta: Vec::new(),
+            stretch: Vec::new(),
+        }
     }
 }
 
 impl Refiner for Vrsph {
     fn permute(&mut self, perm: &[u32]) {
-        if let Some(z) = self.ideal.as_mut() {
-            permute(z, perm);
+        if self.zeta.len() == perm.len() {
+            permute(&mut self.zeta, perm);
+            permute(&mut self.stretch, perm);
         }
     }
 
@@ -59,21 +74,34 @@ impl Refiner for Vrsph {
             return;
         }
         let ops = &ctx.ops;
-        let mut grad = ops.gradient(v, WallField::Velocity);
-        let mut zeta: Vec<Vec3> = grad.par_iter().map(curl_of).collect();
-        if let Some(ideal) = self.ideal.as_ref().filter(|z| z.len() == v.len()) {
-            let loss: Vec<Vec3> = ideal
-                .par_iter()
-                .zip(zeta.par_iter())
-                .map(|(ideal, now)| ideal - now)
+        if self.zeta.len() == v.len() {
+            let (zeta, stretch, (nu, dt)) = (&self.zeta, &self.stretch, (ctx.nu, ctx.dt));
+            let loss: Vec<Vec3> = (0..v.len())
+                .into_par_iter()
+                .map(|i| {
+                    let (now, lap) = if nu > 0.0 {
+                        ops.curl_laplacian_at(i, Some(v), (zeta, WallField::Zero))
+                    } else {
+                        (ops.curl_at(i, v, WallField::Velocity), Vec3::zeros())
+                    };
+                    zeta[i] + dt * (stretch[i] + nu * lap) - now
+                })
                 .collect();
             let psi = stream_function(ops, &loss);
-            let dv = ops.curl(&psi, WallField::Zero);
-            add_scaled(v, &dv, self.alpha);
-            grad = ops.gradient(v, WallField::Velocity);
-            zeta = grad.par_iter().map(curl_of).collect();
+            let alpha = self.alpha;
+            v.par_iter_mut().enumerate().for_each(|(i, v)| {
+                *v += alpha * ops.curl_at(i, &psi, WallField::Zero);
+            });
         }
-        self.ideal = Some(evolve_vorticity(ops, &zeta, &grad, (ctx.nu, ctx.dt), None));
+        let v: &[Vec3] = v;
+        (self.zeta, self.stretch) = (0..v.len())
+            .into_par_iter()
+            .map(|i| {
+                let grad = ops.gradient_at(i, v, WallField::Velocity);
+                let zeta = curl_of(&grad);
+                (zeta, grad * zeta)
+            })
+            .unzip();
     }
 }
 
@@ -105,15 +133,20 @@ pub fn stream_core(volume: Real) -> Real {
 
 /// The local stream function (Liu Eq. 15) of the vorticity `zeta`:
 /// psi_i = 1 / (4 pi) sum_{j in N(i) + i} zeta_j V_j / sqrt(|x_ij|^2 + e^2).
+///
+/// The weight 1 / sqrt(...) is taken in f32: an f64 square root and division cost more than the
+/// rest of the pass, and f32's rounding (6e-8) matches that of the cached kernel gradients
+/// the other passes read.
 pub fn stream_function(ops: &Operators, zeta: &[Vec3]) -> Vec<Vec3> {
     let e = stream_core(ops.nb.volume);
-    let e2 = e * e;
+    let e2 = (e * e) as f32;
     (0..zeta.len())
         .into_par_iter()
         .map(|i| {
             let mut psi = ops.volume[i] * zeta[i] / e;
             ops.nb.fluid_pairs(i, |j, xij| {
-                psi += ops.volume[j] * zeta[j] / (xij.norm_squared() + e2).sqrt()
+                let w = 1.0 / (xij.norm_squared() as f32 + e2).sqrt();
+                psi += (ops.volume[j] * Real::from(w)) * zeta[j]
             });
             psi / (4.0 * PI)
         })

@@ -125,14 +125,49 @@ impl<'a> Operators<'a> {
     /// [`Self::laplacian`] at particle i.
     #[inline]
     pub fn laplacian_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Vec3 {
-        let k = self.nb.kernel;
-        let eps = 0.01 * k.support() * k.support();
+        self.curl_laplacian_at(i, None, (a, wall)).1
+    }
+
+    /// The curl of `v` (walls at their velocity) and the Laplacian of `a` (walls holding
+    /// `a_wall`) at particle i, in one pass over its neighbours: VRSPH reads both at the same
+    /// point of the step (Liu et al. Algorithm 2). Without `v` the curl is zero.
+    #[inline]
+    pub fn curl_laplacian_at(
+        &self,
+        i: usize,
+        v: Option<&[Vec3]>,
+        (a, a_wall): (&[Vec3], WallField),
+    ) -> (Vec3, Vec3) {
+        let eps = 0.01 * self.nb.kernel.support() * self.nb.kernel.support();
         let ai = a[i];
-        let mut l = Vec3::zeros();
-        self.pairs(i, a, wall, |vj, aj, xij, grad| {
-            l += (vj * (ai - aj).dot(&xij) / (xij.norm_squared() + eps)) * grad
-        });
-        10.0 * l
+        let (mut c, mut l) = (Vec3::zeros(), Vec3::zeros());
+        match v {
+            Some(v) => {
+                let vi = v[i];
+                self.nb.fluid_pairs_grad(i, |j, xij, grad| {
+                    let vj = self.volume[j];
+                    c += vj * (vi - v[j]).cross(&grad);
+                    l += (vj * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
+                })
+            }
+            None => self.nb.fluid_pairs_grad(i, |j, xij, grad| {
+                l += (self.volume[j] * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
+            }),
+        }
+        if self.walls {
+            let b = self.nb.boundary;
+            self.nb.boundary_pairs_grad(i, |k, xik, grad| {
+                if let Some(v) = v {
+                    c += b.volume[k] * (v[i] - b.v[k]).cross(&grad);
+                }
+                let ak = match a_wall {
+                    WallField::Velocity => b.v[k],
+                    WallField::Zero => Vec3::zeros(),
+                };
+                l += (b.volume[k] * (ai - ak).dot(&xik) / (xik.norm_squared() + eps)) * grad;
+            });
+        }
+        (c, 10.0 * l)
     }
 
     /// Marks the particles marked in `set` and their fluid neighbours (the set grown by one

@@ -7,9 +7,10 @@
 //! second order in time, and each sample costs one interpolation instead of four.
 
 use ndarray::{Array3, Zip};
+use rayon::prelude::*;
 
-use super::interp::Stagger;
-use super::mac::MacGrid;
+use super::interp::{standard, Stagger};
+use super::mac::{MacGrid, MacView};
 use crate::scene::Advection;
 use crate::Real;
 
@@ -43,17 +44,18 @@ enum Trace {
     Euler,
 }
 
-/// Where the fluid at sample `idx` of a field laid out as `stagger` was `dt` ago, in cell units.
-#[inline]
-fn backtrace(
-    vel: &MacGrid,
+/// Where the fluid at sample `idx` of a field laid out as `stagger`, on the faces of axis `F`
+/// (3: cell centres), was `dt` ago, in cell units.
+#[inline(always)]
+fn backtrace<const F: usize>(
+    vel: &MacView,
     stagger: &Stagger,
     idx: [usize; 3],
     dt_cells: Real,
     trace: Trace,
 ) -> [Real; 3] {
     let g = stagger.position(idx);
-    let v1 = vel.velocity_at_sample(stagger.face_axis(), idx);
+    let v1 = vel.velocity_at_sample::<F>(idx);
     let v = match trace {
         Trace::Euler => v1,
         Trace::Midpoint => {
@@ -65,7 +67,8 @@ fn backtrace(
 }
 
 /// One semi-Lagrangian step; with `range`, also the smallest and largest sample each new value
-/// was interpolated from (MacCormack's clamp).
+/// was interpolated from (MacCormack's clamp). The samples are visited an x-slab at a time
+/// (one parallel task each), with the field and the velocity read as flat slices.
 fn semi_lagrangian(
     field: &Array3<Real>,
     stagger: Stagger,
@@ -74,25 +77,79 @@ fn semi_lagrangian(
     trace: Trace,
     range: bool,
 ) -> (Array3<Real>, Option<[Array3<Real>; 2]>) {
+    let run = match stagger.face_axis() {
+        Some(0) => semi_lagrangian_on::<0>,
+        Some(1) => semi_lagrangian_on::<1>,
+        Some(2) => semi_lagrangian_on::<2>,
+        _ => semi_lagrangian_on::<3>,
+    };
+    run(field, stagger, vel, dt, trace, range)
+}
+
+/// [`semi_lagrangian`] for a field on the faces of axis `F` (3: cell centres).
+fn semi_lagrangian_on<const F: usize>(
+    field: &Array3<Real>,
+    stagger: Stagger,
+    vel: &MacGrid,
+    dt: Real,
+    trace: Trace,
+    range: bool,
+) -> (Array3<Real>, Option<[Array3<Real>; 2]>) {
     let dt_cells = dt / vel.dx;
+    let view = vel.view();
+    let data = standard(field);
+    let [_, ny, nz] = stagger.shape;
+    let slab = (ny * nz).max(1);
     let mut out = Array3::zeros(field.raw_dim());
+    let out_slabs = slabs(&mut out, slab);
     if !range {
-        Zip::indexed(&mut out).par_for_each(|(i, j, k), o| {
-            let g = backtrace(vel, &stagger, [i, j, k], dt_cells, trace);
-            *o = stagger.sample(field, g);
+        out_slabs.enumerate().for_each(|(i, o)| {
+            departures::<F>(&view, &stagger, i, dt_cells, trace, |c, g| {
+                o[c] = stagger.sample_slice(data, g)
+            });
         });
         return (out, None);
     }
     let mut lo = Array3::zeros(field.raw_dim());
     let mut hi = Array3::zeros(field.raw_dim());
-    Zip::indexed(&mut out)
-        .and(&mut lo)
-        .and(&mut hi)
-        .par_for_each(|(i, j, k), o, l, h| {
-            let g = backtrace(vel, &stagger, [i, j, k], dt_cells, trace);
-            (*o, *l, *h) = stagger.sample_with_range(field, g);
+    out_slabs
+        .zip(slabs(&mut lo, slab).zip(slabs(&mut hi, slab)))
+        .enumerate()
+        .for_each(|(i, (o, (l, h)))| {
+            departures::<F>(&view, &stagger, i, dt_cells, trace, |c, g| {
+                (o[c], l[c], h[c]) = stagger.sample_slice_with_range(data, g)
+            });
         });
     (out, Some([lo, hi]))
+}
+
+/// Calls `visit(index in the slab, departure point)` for every sample of x-slab `i` of a
+/// field on the faces of axis `F` (3: cell centres).
+#[inline(always)]
+fn departures<const F: usize>(
+    vel: &MacView,
+    stagger: &Stagger,
+    i: usize,
+    dt_cells: Real,
+    trace: Trace,
+    mut visit: impl FnMut(usize, [Real; 3]),
+) {
+    let [_, ny, nz] = stagger.shape;
+    for j in 0..ny {
+        for k in 0..nz {
+            visit(
+                j * nz + k,
+                backtrace::<F>(vel, stagger, [i, j, k], dt_cells, trace),
+            );
+        }
+    }
+}
+
+/// The x-slabs of a new array, for parallel writing.
+fn slabs(a: &mut Array3<Real>, slab: usize) -> rayon::slice::ChunksMut<'_, Real> {
+    a.as_slice_mut()
+        .expect("a new array is in standard layout")
+        .par_chunks_mut(slab)
 }
 
 /// MacCormack: a forward and a backward semi-Lagrangian step estimate the forward step's

@@ -38,18 +38,15 @@ impl Stagger {
 
     /// The two sample indices and the weight of the second along axis `a`, for a position
     /// `g` in cell units from the grid origin.
-    #[inline]
+    #[inline(always)]
     fn axis(&self, a: usize, g: Real) -> AxisWeights {
         axis_weights(g - self.offset[a], self.shape[a], self.period[a])
     }
 
-    /// The eight samples around position `g` (cell units from the grid origin), x fastest,
-    /// and the weights along x, y, z.
-    #[inline]
-    fn corners(&self, field: &Array3<Real>, g: [Real; 3]) -> ([Real; 8], [Real; 3]) {
-        let data = field
-            .as_slice()
-            .expect("grid fields are in standard layout");
+    /// The eight samples of `data` (the field's standard-layout array as a slice) around
+    /// position `g` (cell units from the grid origin), x fastest, and the weights along x, y, z.
+    #[inline(always)]
+    fn corners(&self, data: &[Real], g: [Real; 3]) -> ([Real; 8], [Real; 3]) {
         corners(
             data,
             self.shape,
@@ -57,11 +54,15 @@ impl Stagger {
         )
     }
 
-    /// The field at position `g` (cell units from the grid origin), with the smallest and
-    /// largest of the samples it was interpolated from.
-    #[inline]
-    pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
-        let (c, f) = self.corners(field, g);
+    /// The field whose standard-layout array is `data` at position `g` (cell units from the
+    /// grid origin), with the smallest and largest of the samples it was interpolated from.
+    #[inline(always)]
+    pub(crate) fn sample_slice_with_range(
+        &self,
+        data: &[Real],
+        g: [Real; 3],
+    ) -> (Real, Real, Real) {
+        let (c, f) = self.corners(data, g);
         let (lo, hi) = c
             .iter()
             .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), &v| {
@@ -70,11 +71,25 @@ impl Stagger {
         (trilinear(&c, f), lo, hi)
     }
 
+    /// The field whose standard-layout array is `data` at position `g` (cell units from the
+    /// grid origin): [`Self::sample`] without the layout check, for loops over many samples.
+    #[inline(always)]
+    pub(crate) fn sample_slice(&self, data: &[Real], g: [Real; 3]) -> Real {
+        let (c, f) = self.corners(data, g);
+        trilinear(&c, f)
+    }
+
+    /// The field at position `g` (cell units from the grid origin), with the smallest and
+    /// largest of the samples it was interpolated from.
+    #[inline]
+    pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
+        self.sample_slice_with_range(standard(field), g)
+    }
+
     /// The field at position `g` (cell units from the grid origin).
     #[inline]
     pub fn sample(&self, field: &Array3<Real>, g: [Real; 3]) -> Real {
-        let (c, f) = self.corners(field, g);
-        trilinear(&c, f)
+        self.sample_slice(standard(field), g)
     }
 
     /// The axis whose faces the samples sit on, or None for cell centres.
@@ -89,8 +104,16 @@ impl Stagger {
     }
 }
 
+/// The elements of a grid field, which is always in standard layout.
+#[inline(always)]
+pub(crate) fn standard(field: &Array3<Real>) -> &[Real] {
+    field
+        .as_slice()
+        .expect("grid fields are in standard layout")
+}
+
 /// Trilinear interpolation of eight corner values (x fastest) at weights `f`.
-#[inline]
+#[inline(always)]
 pub(crate) fn trilinear(c: &[Real; 8], f: [Real; 3]) -> Real {
     let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
     let x00 = lerp(c[0], c[1], f[0]);
@@ -105,7 +128,7 @@ pub(crate) type AxisWeights = (usize, usize, Real);
 
 /// The samples around coordinate `c` (in samples) on an axis of `len` samples: wrapped with
 /// period `period`, or clamped to the end samples (zero weight beyond them).
-#[inline]
+#[inline(always)]
 pub(crate) fn axis_weights(c: Real, len: usize, period: Option<usize>) -> AxisWeights {
     // floor by truncation: `f64::floor` is a libm call on baseline x86-64.
     let t = c as isize;
@@ -137,7 +160,7 @@ pub(crate) fn axis_weights(c: Real, len: usize, period: Option<usize>) -> AxisWe
 
 /// The eight samples of a standard-layout array of `shape` at the given axis weights, x
 /// fastest, and the weights.
-#[inline]
+#[inline(always)]
 pub(crate) fn corners(
     data: &[Real],
     shape: [usize; 3],

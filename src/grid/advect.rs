@@ -44,28 +44,6 @@ enum Trace {
     Euler,
 }
 
-/// Where the fluid at sample `idx` of a field laid out as `stagger`, on the faces of axis `F`
-/// (3: cell centres), was `dt` ago, in cell units.
-#[inline(always)]
-fn backtrace<const F: usize>(
-    vel: &MacView,
-    stagger: &Stagger,
-    idx: [usize; 3],
-    dt_cells: Real,
-    trace: Trace,
-) -> [Real; 3] {
-    let g = stagger.position(idx);
-    let v1 = vel.velocity_at_sample::<F>(idx);
-    let v = match trace {
-        Trace::Euler => v1,
-        Trace::Midpoint => {
-            let mid: [Real; 3] = std::array::from_fn(|a| g[a] - 0.5 * dt_cells * v1[a]);
-            vel.velocity_at_grid(mid)
-        }
-    };
-    std::array::from_fn(|a| g[a] - dt_cells * v[a])
-}
-
 /// One semi-Lagrangian step; with `range`, also the smallest and largest sample each new value
 /// was interpolated from (MacCormack's clamp). The samples are visited an x-slab at a time
 /// (one parallel task each), with the field and the velocity read as flat slices.
@@ -123,8 +101,11 @@ fn semi_lagrangian_on<const F: usize>(
     (out, Some([lo, hi]))
 }
 
-/// Calls `visit(index in the slab, departure point)` for every sample of x-slab `i` of a
-/// field on the faces of axis `F` (3: cell centres).
+/// Calls `visit(index in the slab, departure point in cell units)` for every sample of x-slab
+/// `i` of a field on the faces of axis `F` (3: cell centres): where the fluid there was `dt`
+/// ago. A z-row is traced in passes (the Euler or midpoint points of the whole row, then
+/// the velocity at each): the samples are independent, and separate passes let the processor
+/// overlap their long chains of dependent arithmetic instead of waiting on each in turn.
 #[inline(always)]
 fn departures<const F: usize>(
     vel: &MacView,
@@ -135,12 +116,27 @@ fn departures<const F: usize>(
     mut visit: impl FnMut(usize, [Real; 3]),
 ) {
     let [_, ny, nz] = stagger.shape;
+    let mut row: Vec<[Real; 3]> = Vec::with_capacity(nz);
     for j in 0..ny {
-        for k in 0..nz {
-            visit(
-                j * nz + k,
-                backtrace::<F>(vel, stagger, [i, j, k], dt_cells, trace),
-            );
+        row.clear();
+        row.extend((0..nz).map(|k| {
+            let g = stagger.position([i, j, k]);
+            let v = vel.velocity_at_sample::<F>([i, j, k]);
+            let step = match trace {
+                Trace::Euler => dt_cells,
+                Trace::Midpoint => 0.5 * dt_cells,
+            };
+            std::array::from_fn(|a| g[a] - step * v[a])
+        }));
+        if let Trace::Midpoint = trace {
+            for (k, p) in row.iter_mut().enumerate() {
+                let g = stagger.position([i, j, k]);
+                let v = vel.velocity_at_grid(*p);
+                *p = std::array::from_fn(|a| g[a] - dt_cells * v[a]);
+            }
+        }
+        for (k, &p) in row.iter().enumerate() {
+            visit(j * nz + k, p);
         }
     }
 }

@@ -22,17 +22,47 @@ pub fn advect(
     dt: Real,
     scheme: Advection,
 ) -> Array3<Real> {
+    let mut out = Array3::zeros(field.raw_dim());
+    advect_into(field, stagger, vel, dt, scheme, &mut out);
+    out
+}
+
+/// [`advect`] into `out` (resized when its shape differs): a solver that keeps `out` between
+/// steps allocates nothing.
+pub fn advect_into(
+    field: &Array3<Real>,
+    stagger: Stagger,
+    vel: &MacGrid,
+    dt: Real,
+    scheme: Advection,
+    out: &mut Array3<Real>,
+) {
+    if out.raw_dim() != field.raw_dim() || !out.is_standard_layout() {
+        *out = Array3::zeros(field.raw_dim());
+    }
     match scheme {
         Advection::SemiLagrangian => {
-            semi_lagrangian(field, stagger, vel, dt, Trace::Midpoint, false).0
+            semi_lagrangian(field, stagger, vel, dt, Trace::Midpoint, out, false);
         }
-        Advection::Maccormack => maccormack(field, stagger, vel, dt),
+        Advection::Maccormack => maccormack(field, stagger, vel, dt, out),
     }
 }
 
 /// Every face component of `vel` carried by `vel` itself over `dt`.
 pub fn advect_velocity(vel: &MacGrid, dt: Real, scheme: Advection) -> [Array3<Real>; 3] {
     std::array::from_fn(|a| advect(&vel.u[a], vel.face_stagger(a), vel, dt, scheme))
+}
+
+/// [`advect_velocity`] into `out` (see [`advect_into`]).
+pub fn advect_velocity_into(
+    vel: &MacGrid,
+    dt: Real,
+    scheme: Advection,
+    out: &mut [Array3<Real>; 3],
+) {
+    for (a, out) in out.iter_mut().enumerate() {
+        advect_into(&vel.u[a], vel.face_stagger(a), vel, dt, scheme, out);
+    }
 }
 
 /// How a sample's departure point is found.
@@ -44,24 +74,26 @@ enum Trace {
     Euler,
 }
 
-/// One semi-Lagrangian step; with `range`, also the smallest and largest sample each new value
-/// was interpolated from (MacCormack's clamp). The samples are visited an x-slab at a time
-/// (one parallel task each), with the field and the velocity read as flat slices.
+/// One semi-Lagrangian step into `out` (of the field's shape, standard layout); with `range`,
+/// also the smallest and largest sample each new value was interpolated from (MacCormack's
+/// clamp). The samples are visited an x-slab at a time (one parallel task each), with the field
+/// and the velocity read as flat slices.
 fn semi_lagrangian(
     field: &Array3<Real>,
     stagger: Stagger,
     vel: &MacGrid,
     dt: Real,
     trace: Trace,
+    out: &mut Array3<Real>,
     range: bool,
-) -> (Array3<Real>, Option<[Array3<Real>; 2]>) {
+) -> Option<[Array3<Real>; 2]> {
     let run = match stagger.face_axis() {
         Some(0) => semi_lagrangian_on::<0>,
         Some(1) => semi_lagrangian_on::<1>,
         Some(2) => semi_lagrangian_on::<2>,
         _ => semi_lagrangian_on::<3>,
     };
-    run(field, stagger, vel, dt, trace, range)
+    run(field, stagger, vel, dt, trace, out, range)
 }
 
 /// [`semi_lagrangian`] for a field on the faces of axis `F` (3: cell centres).
@@ -71,22 +103,22 @@ fn semi_lagrangian_on<const F: usize>(
     vel: &MacGrid,
     dt: Real,
     trace: Trace,
+    out: &mut Array3<Real>,
     range: bool,
-) -> (Array3<Real>, Option<[Array3<Real>; 2]>) {
+) -> Option<[Array3<Real>; 2]> {
     let dt_cells = dt / vel.dx;
     let view = vel.view();
     let data = standard(field);
     let [_, ny, nz] = stagger.shape;
     let slab = (ny * nz).max(1);
-    let mut out = Array3::zeros(field.raw_dim());
-    let out_slabs = slabs(&mut out, slab);
+    let out_slabs = slabs(out, slab);
     if !range {
         out_slabs.enumerate().for_each(|(i, o)| {
             departures::<F>(&view, &stagger, i, dt_cells, trace, |c, g| {
                 o[c] = stagger.sample_slice(data, g)
             });
         });
-        return (out, None);
+        return None;
     }
     let mut lo = Array3::zeros(field.raw_dim());
     let mut hi = Array3::zeros(field.raw_dim());
@@ -98,7 +130,7 @@ fn semi_lagrangian_on<const F: usize>(
                 (o[c], l[c], h[c]) = stagger.sample_slice_with_range(data, g)
             });
         });
-    (out, Some([lo, hi]))
+    Some([lo, hi])
 }
 
 /// Calls `visit(index in the slab, departure point in cell units)` for every sample of x-slab
@@ -151,11 +183,18 @@ fn slabs(a: &mut Array3<Real>, slab: usize) -> rayon::slice::ChunksMut<'_, Real>
 /// MacCormack: a forward and a backward semi-Lagrangian step estimate the forward step's
 /// error, half of which is removed; the result is clamped to the range of the samples the
 /// forward step read, which keeps the scheme free of new extrema (Selle et al. 2008, Eq. 6–8).
-fn maccormack(field: &Array3<Real>, stagger: Stagger, vel: &MacGrid, dt: Real) -> Array3<Real> {
-    let (mut forward, range) = semi_lagrangian(field, stagger, vel, dt, Trace::Euler, true);
-    let [lo, hi] = range.expect("requested with range");
-    let (back, _) = semi_lagrangian(&forward, stagger, vel, -dt, Trace::Euler, false);
-    Zip::from(&mut forward)
+fn maccormack(
+    field: &Array3<Real>,
+    stagger: Stagger,
+    vel: &MacGrid,
+    dt: Real,
+    forward: &mut Array3<Real>,
+) {
+    let [lo, hi] = semi_lagrangian(field, stagger, vel, dt, Trace::Euler, forward, true)
+        .expect("requested with range");
+    let mut back = Array3::zeros(field.raw_dim());
+    semi_lagrangian(forward, stagger, vel, -dt, Trace::Euler, &mut back, false);
+    Zip::from(forward)
         .and(field)
         .and(&back)
         .and(&lo)
@@ -163,5 +202,4 @@ fn maccormack(field: &Array3<Real>, stagger: Stagger, vel: &MacGrid, dt: Real) -
         .par_for_each(|f, &orig, &b, &l, &h| {
             *f = (*f + 0.5 * (orig - b)).clamp(l, h);
         });
-    forward
 }

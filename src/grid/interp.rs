@@ -130,31 +130,40 @@ pub(crate) type AxisWeights = (usize, usize, Real);
 /// period `period`, or clamped to the end samples (zero weight beyond them).
 #[inline(always)]
 pub(crate) fn axis_weights(c: Real, len: usize, period: Option<usize>) -> AxisWeights {
+    let Some(n) = period else {
+        return clamped_axis_weights(c, len);
+    };
     // floor by truncation: `f64::floor` is a libm call on baseline x86-64.
     let t = c as isize;
     let i0 = if (t as Real) > c { t - 1 } else { t };
     let f = c - i0 as Real;
-    match period {
-        Some(n) => {
-            let n = n as isize;
-            let lo = if (0..n).contains(&i0) {
-                i0
-            } else {
-                i0.rem_euclid(n)
-            };
-            let hi = if lo + 1 == n { 0 } else { lo + 1 };
-            (lo as usize, hi as usize, f)
-        }
-        None => {
-            let last = len as isize - 1;
-            if i0 < 0 {
-                (0, 0, 0.0)
-            } else if i0 >= last {
-                (last as usize, last as usize, 0.0)
-            } else {
-                (i0 as usize, i0 as usize + 1, f)
-            }
-        }
+    let n = n as isize;
+    let lo = if (0..n).contains(&i0) {
+        i0
+    } else {
+        i0.rem_euclid(n)
+    };
+    let hi = if lo + 1 == n { 0 } else { lo + 1 };
+    (lo as usize, hi as usize, f)
+}
+
+/// [`axis_weights`] on an axis that clamps: the range test comes first, so that inside it the
+/// floor is a plain truncation (the saturating `as` conversion costs a third of the call on
+/// the advection's hot path). A NaN coordinate gives a NaN weight, which carries it on.
+#[inline(always)]
+fn clamped_axis_weights(c: Real, len: usize) -> AxisWeights {
+    let last = len.saturating_sub(1);
+    let end = last as i64 as Real;
+    if c >= 0.0 && c < end {
+        // SAFETY: 0 <= c < last (finite, so not NaN), so c truncates to an integer in range.
+        let i0 = unsafe { c.to_int_unchecked::<i64>() };
+        (i0 as usize, i0 as usize + 1, c - i0 as Real)
+    } else if c >= end {
+        (last, last, 0.0)
+    } else if c < 0.0 || last == 0 {
+        (0, 0, 0.0)
+    } else {
+        (0, 1, c)
     }
 }
 

@@ -203,3 +203,55 @@ fn maccormack(
             *f = (*f + 0.5 * (orig - b)).clamp(l, h);
         });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Vec3;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The semi-Lagrangian step of one sample written out plainly: midpoint backtrace through
+    /// the interpolated velocity, then the field interpolated at the departure point.
+    fn reference(field: &Array3<Real>, stagger: &Stagger, vel: &MacGrid, dt: Real) -> Array3<Real> {
+        let dt_cells = dt / vel.dx;
+        Array3::from_shape_fn(field.raw_dim(), |(i, j, k)| {
+            let g = stagger.position([i, j, k]);
+            let v1 = vel.velocity_at_grid(g);
+            let mid: [Real; 3] = std::array::from_fn(|a| g[a] - 0.5 * dt_cells * v1[a]);
+            let v = vel.velocity_at_grid(mid);
+            stagger.sample(field, std::array::from_fn(|a| g[a] - dt_cells * v[a]))
+        })
+    }
+
+    /// The row-wise advection (flat slices, the velocity at the samples read from their faces,
+    /// the row traced in passes) equals the plain per-sample step to 1e-12, for cell-centred and
+    /// face fields, on clamped and periodic axes, with departure points beyond the domain.
+    #[test]
+    fn semi_lagrangian_equals_the_plain_per_sample_step() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for periodic in [[false; 3], [true, false, true], [false, true, false]] {
+            let mut mac = MacGrid::new([6, 5, 4], 0.1, Vec3::new(0.2, -0.1, 0.3), periodic);
+            for u in mac.u.iter_mut() {
+                u.mapv_inplace(|_| rng.random_range(-2.0..2.0));
+            }
+            mac.sync_periodic();
+            // Up to 2 m/s over 0.08 s: departure points up to 1.6 cells away, past the ends.
+            let dt = 0.08;
+            let mut staggers = vec![mac.cell_stagger()];
+            staggers.extend((0..3).map(|a| mac.face_stagger(a)));
+            for stagger in staggers {
+                let field = Array3::from_shape_fn(stagger.shape, |_| rng.random_range(-1.0..1.0));
+                let fast = advect(&field, stagger, &mac, dt, Advection::SemiLagrangian);
+                let plain = reference(&field, &stagger, &mac, dt);
+                for ((idx, a), b) in fast.indexed_iter().zip(&plain) {
+                    assert!(
+                        (a - b).abs() < 1e-12,
+                        "{periodic:?} {:?} sample {idx:?}: {a} against {b}",
+                        stagger.offset
+                    );
+                }
+            }
+        }
+    }
+}

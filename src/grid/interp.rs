@@ -192,3 +192,54 @@ pub(crate) fn corners(
         [fx, fy, fz],
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The clamped weights by their definition: the floor of the coordinate, clamped to the
+    /// end samples with zero weight beyond them; the weight is the coordinate less the index.
+    fn by_floor(c: Real, len: usize) -> AxisWeights {
+        let last = len - 1;
+        let fl = c.floor();
+        if fl < 0.0 {
+            (0, 0, 0.0)
+        } else if fl >= last as Real {
+            (last, last, 0.0)
+        } else {
+            (fl as usize, fl as usize + 1, c - (fl as usize) as Real)
+        }
+    }
+
+    /// The clamped weights (range test first, then truncation) are the floor's, bit for bit,
+    /// at random coordinates inside and beyond the axis, at the samples themselves, just off
+    /// them and at the ends; a NaN coordinate gives a NaN weight.
+    #[test]
+    fn clamped_axis_weights_follow_the_floor() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for len in [1, 2, 3, 17] {
+            let l = len as Real;
+            let mut coords: Vec<Real> =
+                (0..2000).map(|_| rng.random_range(-3.0..l + 3.0)).collect();
+            for s in -2..=len as i32 + 2 {
+                let s = s as Real;
+                coords.extend([s, s - 1e-15, s + 1e-15, s - 0.5, -0.0]);
+            }
+            for c in coords {
+                let (i0, i1, f) = axis_weights(c, len, None);
+                let (j0, j1, g) = by_floor(c, len);
+                assert!(
+                    (i0, i1) == (j0, j1) && f.to_bits() == g.to_bits(),
+                    "len {len}, c = {c:e}: {:?} against {:?}",
+                    (i0, i1, f),
+                    (j0, j1, g)
+                );
+            }
+            if len > 1 {
+                assert!(axis_weights(Real::NAN, len, None).2.is_nan());
+            }
+        }
+    }
+}

@@ -164,10 +164,20 @@ impl MacGrid {
         })
     }
 
-    /// Largest face speed component, m/s.
     /// Largest |face velocity|, m/s; NaN if any face is not a number (so one pass both bounds
-    /// the step and detects a blown-up state).
+    /// the step and detects a blown-up state). The maximum of |u| and the NaN test are kept
+    /// apart per chunk, which lets the compiler vectorise both.
     pub fn max_face_speed(&self) -> Real {
+        let chunk = |c: &[Real]| {
+            let (m, nan) = c.iter().fold((0.0, false), |(m, nan): (Real, bool), &x| {
+                (m.max(x.abs()), nan | x.is_nan())
+            });
+            if nan {
+                Real::NAN
+            } else {
+                m
+            }
+        };
         let nan_max = |a: Real, b: Real| {
             if a.is_nan() || b.is_nan() {
                 Real::NAN
@@ -175,9 +185,10 @@ impl MacGrid {
                 a.max(b)
             }
         };
-        self.u
+        self.view()
+            .u
             .iter()
-            .map(|c| Zip::from(c).par_fold(|| 0.0, |m, &x| nan_max(m, x.abs()), nan_max))
+            .map(|u| u.par_chunks(1 << 14).map(chunk).reduce(|| 0.0, nan_max))
             .fold(0.0, nan_max)
     }
 

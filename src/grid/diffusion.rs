@@ -7,7 +7,7 @@ use super::layout::Layout;
 use super::multigrid::Multigrid;
 use super::pcg::{self, Workspace};
 use super::poisson::{
-    check_settings, check_shape, coordinates, finish, load, SolveError, SolveStats, SolverSettings,
+    check_settings, check_shape, coordinates, finish, SolveError, SolveStats, SolverSettings,
 };
 use super::stencil::{FineStencil, Problem, DIRICHLET, FLUID};
 use crate::Real;
@@ -149,7 +149,15 @@ impl DiffusionSystem {
         let (problem, layout, a) = (&self.problem, self.problem.layout, self.a);
         check_shape(&layout, "x", x)?;
         check_settings(settings)?;
-        if let Some(idx) = x.iter().position(|v| !v.is_finite()) {
+        let copy: Vec<Real>;
+        let old = match x.as_slice() {
+            Some(old) => old,
+            None => {
+                copy = x.iter().copied().collect();
+                &copy
+            }
+        };
+        if let Some(idx) = old.iter().position(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
                 what: "x",
                 cell: coordinates(&layout, idx),
@@ -159,25 +167,20 @@ impl DiffusionSystem {
             return Ok(SolveStats::default());
         }
         let work = &mut self.work;
-        load(&layout, "x", x, |i| problem.kinds[i] == FLUID, &mut work.x)?;
-        // b = x_old + a * (sum of fixed neighbours) on the unknowns.
-        let copy: Vec<Real>;
-        let old = match x.as_slice() {
-            Some(old) => old,
-            None => {
-                copy = x.iter().copied().collect();
-                &copy
-            }
-        };
-        work.b
+        // The initial guess x_old on the unknowns (zero elsewhere), and b = x_old + a * (sum
+        // of fixed neighbours) there: x_old here, the fixed neighbours next.
+        work.x
             .par_chunks_mut(layout.slab())
+            .zip(work.b.par_chunks_mut(layout.slab()))
             .zip(old.par_chunks(layout.slab()))
             .zip(problem.kinds.par_chunks(layout.slab()))
-            .for_each(|((b, old), kinds)| {
-                for ((b, &old), &kind) in b.iter_mut().zip(old).zip(kinds) {
-                    if kind == FLUID {
-                        *b = old;
-                    }
+            .for_each(|(((x, b), old), kinds)| {
+                for (((x, b), &old), &kind) in x.iter_mut().zip(b).zip(old).zip(kinds) {
+                    (*x, *b) = if kind == FLUID {
+                        (old, old)
+                    } else {
+                        (0.0, 0.0)
+                    };
                 }
             });
         for (cell, neighbours) in &self.fixed_neighbours {
@@ -203,10 +206,20 @@ impl DiffusionSystem {
             );
             finish(o, stats)
         };
-        for ((x, &v), &k) in x.iter_mut().zip(&work.x).zip(&problem.kinds) {
+        let store = |(x, (&v, &k)): (&mut Real, (&f64, &u8))| {
             if k == FLUID {
                 *x = v;
             }
+        };
+        match x.as_slice_mut() {
+            Some(xs) => xs
+                .iter_mut()
+                .zip(work.x.iter().zip(&problem.kinds))
+                .for_each(store),
+            None => x
+                .iter_mut()
+                .zip(work.x.iter().zip(&problem.kinds))
+                .for_each(store),
         }
         result
     }

@@ -93,8 +93,10 @@ fn relax_class<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32], 
             let first = (i + j + parity) % 2;
             // SAFETY: indices come from the layout (in range); the neighbours read are of
             // other colour classes than the cell written, which this class never writes.
-            let read = |m: usize| unsafe { xs.read(m) };
-            let update = |k: usize, s: f32| {
+            // (`move`: the closures hold their own copy of the pointer, which the compiler
+            // then keeps in a register instead of reloading it after every raw write.)
+            let read = move |m: usize| unsafe { xs.read(m) };
+            let update = move |k: usize, s: f32| {
                 let c = row.base() + k;
                 unsafe { xs.write(c, (b[c] + scale * s) * coef.inv_diagonal(c)) };
             };

@@ -250,18 +250,26 @@ impl MacView<'_> {
     /// component sits either on faces (its own axis, offset 0) or at cell centres (offset 1/2).
     #[inline(always)]
     pub fn velocity_at_grid(&self, g: [Real; 3]) -> [Real; 3] {
-        let weights = |b: usize| {
-            let period = self.periodic[b].then_some(self.dims[b]);
-            [
-                axis_weights(g[b], self.dims[b] + 1, period),
-                axis_weights(g[b] - 0.5, self.dims[b], period),
-            ]
-        };
-        let w = [weights(0), weights(1), weights(2)];
+        let w = [
+            self.weights::<0>(g[0]),
+            self.weights::<1>(g[1]),
+            self.weights::<2>(g[2]),
+        ];
         [
             self.interpolate::<0>(&w),
             self.interpolate::<1>(&w),
             self.interpolate::<2>(&w),
+        ]
+    }
+
+    /// The weights along axis `B` at coordinate `g` (cell units) of the faces and of the cell
+    /// centres.
+    #[inline(always)]
+    fn weights<const B: usize>(&self, g: Real) -> [AxisWeights; 2] {
+        let period = self.periodic[B].then_some(self.dims[B]);
+        [
+            axis_weights(g, self.dims[B] + 1, period),
+            axis_weights(g - 0.5, self.dims[B], period),
         ]
     }
 

@@ -108,7 +108,8 @@ fn semi_lagrangian_on<const F: usize>(
 ) -> Option<[Array3<Real>; 2]> {
     let dt_cells = dt / vel.dx;
     let view = vel.view();
-    let data = standard(field);
+    let field = field.as_standard_layout();
+    let data = standard(&field);
     let [_, ny, nz] = stagger.shape;
     let slab = (ny * nz).max(1);
     let out_slabs = slabs(out, slab);

@@ -168,7 +168,8 @@ impl DiffusionSystem {
         }
         let work = &mut self.work;
         // The initial guess x_old on the unknowns (zero elsewhere), and b = x_old + a * (sum
-        // of fixed neighbours) there: x_old here, the fixed neighbours next.
+        // of fixed neighbours) there: x_old here (the sum is empty for all but the cells next
+        // to fixed ones, and x + a * 0 = x but for the sign of a zero), the fixed neighbours next.
         work.x
             .par_chunks_mut(layout.slab())
             .zip(work.b.par_chunks_mut(layout.slab()))

@@ -3,7 +3,7 @@
 //! face component along axis a has offset 0 on a. Periodic axes wrap, the others clamp to the
 //! outermost samples (zero-gradient extrapolation beyond the domain).
 
-use ndarray::Array3;
+use ndarray::{Array3, ArrayRef, Ix3};
 
 use crate::Real;
 
@@ -104,9 +104,10 @@ impl Stagger {
     }
 }
 
-/// The elements of a grid field, which is always in standard layout.
+/// The elements of a grid field in standard layout (as the grid makes them; callers that take
+/// arrays from outside pass them through `as_standard_layout` first).
 #[inline(always)]
-pub(crate) fn standard(field: &Array3<Real>) -> &[Real] {
+pub(crate) fn standard(field: &ArrayRef<Real, Ix3>) -> &[Real] {
     field
         .as_slice()
         .expect("grid fields are in standard layout")

@@ -35,7 +35,8 @@ pub fn project(
 fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) {
     let [n0, n1, n2] = grid.dims;
     let periodic = bounds.periodic();
-    let y = standard(y);
+    let y = y.as_standard_layout();
+    let y = standard(&y);
     let cell_row = |i: usize, j: usize| &y[(i * n1 + j) * n2..][..n2];
     for a in 0..3 {
         let fixed = bounds.fixed[a]

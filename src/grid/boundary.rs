@@ -4,6 +4,7 @@
 //! viscosity solve leave fixed faces alone, which is the solid velocity boundary condition.
 
 use ndarray::{s, Array3, Axis, Zip};
+use rayon::prelude::*;
 
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
 use super::mac::{cells_beside_face, MacGrid};
@@ -211,49 +212,94 @@ impl Boundaries {
         }
     }
 
-    /// Marks the fixed faces of every component and their velocities.
+    /// Marks the fixed faces of every component and their velocities, a row of faces along z
+    /// at a time over flat slices (a moving obstacle reclassifies every face on every step).
     fn classify_faces(&mut self, grid: &MacGrid, bodies: &[RigidBody], t: Real) {
-        let dims = grid.dims;
+        let [_, n1, n2] = grid.dims;
+        let owner = self
+            .owner
+            .as_slice()
+            .expect("the owner array is in standard layout");
+        let moving: Vec<bool> = bodies.iter().map(RigidBody::is_moving).collect();
+        // Each body's v, w and origin at t, for v + w x (x - origin) at its faces
+        // ([`RigidBody::velocity_at`], whose pose would otherwise be rebuilt at every face).
+        let motion: Vec<(Vec3, Vec3, Vec3)> = bodies
+            .iter()
+            .map(|b| {
+                let origin = b.pose(t).translation.vector;
+                (b.linear_velocity(t), b.angular_velocity(t), origin)
+            })
+            .collect();
         for a in 0..3 {
-            let n = dims[a];
+            let n = grid.dims[a];
             let periodic = self.sides[a][0] == GridSide::Periodic;
             let sides = self.sides[a];
-            let owner = &self.owner;
-            Zip::indexed(&mut self.fixed[a])
-                .and(&mut self.fixed_value[a])
-                .and(&mut self.inside[a])
-                .par_for_each(|(i, j, k), fixed, value, inside| {
-                    let idx = [i, j, k];
-                    let cell_at = |c: usize| {
-                        let mut cell = idx;
-                        cell[a] = c;
-                        owner[cell]
-                    };
-                    // The cells on either side; None beyond a non-periodic side.
-                    let (left, right) = cells_beside_face(idx[a], n, periodic);
-                    let (left, right) = (left.map(cell_at), right.map(cell_at));
-                    let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
-                    *inside = match (left, right) {
-                        (Some(l), Some(r)) => {
-                            l != FLUID && r != FLUID && !bodies[l as usize].is_moving()
+            let [m1, m2] = [n1 + usize::from(a == 1), n2 + usize::from(a == 2)];
+            fn slabs<T: Send>(x: &mut Array3<T>, len: usize) -> rayon::slice::ChunksMut<'_, T> {
+                x.as_slice_mut()
+                    .expect("face arrays are in standard layout")
+                    .par_chunks_mut(len.max(1))
+            }
+            slabs(&mut self.fixed[a], m1 * m2)
+                .zip(slabs(&mut self.fixed_value[a], m1 * m2))
+                .zip(slabs(&mut self.inside[a], m1 * m2))
+                .enumerate()
+                .for_each(|(i, ((fixed, value), inside))| {
+                    let owner_row = |i: usize, j: usize| &owner[(i * n1 + j) * n2..][..n2];
+                    for j in 0..m1 {
+                        // Along x and y the cells beside a row of faces are two rows of cells;
+                        // along z they are neighbours in one row.
+                        let rows = match a {
+                            0 => cells_beside_face(i, n, periodic),
+                            1 => cells_beside_face(j, n, periodic),
+                            _ => (None, None),
+                        };
+                        let (lo, hi) = if a == 0 {
+                            (
+                                rows.0.map(|c| owner_row(c, j)),
+                                rows.1.map(|c| owner_row(c, j)),
+                            )
+                        } else {
+                            (
+                                rows.0.map(|c| owner_row(i, c)),
+                                rows.1.map(|c| owner_row(i, c)),
+                            )
+                        };
+                        for k in 0..m2 {
+                            let idx = [i, j, k];
+                            // The cells on either side; None beyond a non-periodic side.
+                            let (left, right) = if a == 2 {
+                                let row = owner_row(i, j);
+                                let (l, r) = cells_beside_face(k, n, periodic);
+                                (l.map(|c| row[c]), r.map(|c| row[c]))
+                            } else {
+                                (lo.map(|r| r[k]), hi.map(|r| r[k]))
+                            };
+                            let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
+                            let f = j * m2 + k;
+                            inside[f] = match (left, right) {
+                                (Some(l), Some(r)) => {
+                                    l != FLUID && r != FLUID && !moving[l as usize]
+                                }
+                                _ => false,
+                            };
+                            let prescribed = if let Some(body) = solid {
+                                let x = grid.face_center(a, idx);
+                                let (v, w, origin) = &motion[body as usize];
+                                Some((v + w.cross(&(x - origin)))[a])
+                            } else if left.is_none() || right.is_none() {
+                                match sides[usize::from(left.is_some())] {
+                                    GridSide::Wall | GridSide::Slip => Some(0.0),
+                                    GridSide::MovingWall(v) | GridSide::Inflow(v) => Some(v[a]),
+                                    GridSide::Open | GridSide::Periodic => None,
+                                }
+                            } else {
+                                None
+                            };
+                            fixed[f] = prescribed.is_some();
+                            value[f] = prescribed.unwrap_or(0.0);
                         }
-                        _ => false,
-                    };
-                    let prescribed = if let Some(body) = solid {
-                        let x = Point3::from(grid.face_center(a, idx));
-                        Some(bodies[body as usize].velocity_at(t, &x)[a])
-                    } else if left.is_none() || right.is_none() {
-                        let side = sides[usize::from(left.is_some())];
-                        match side {
-                            GridSide::Wall | GridSide::Slip => Some(0.0),
-                            GridSide::MovingWall(v) | GridSide::Inflow(v) => Some(v[a]),
-                            GridSide::Open | GridSide::Periodic => None,
-                        }
-                    } else {
-                        None
-                    };
-                    *fixed = prescribed.is_some();
-                    *value = prescribed.unwrap_or(0.0);
+                    }
                 });
         }
     }
@@ -273,9 +319,11 @@ fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real) -> Array3<u16> {
         };
         let (rx, ry, rz) = (range(0), range(1), range(2));
         let (x0, y0, z0) = (rx.start, ry.start, rz.start);
+        let pose = body.pose(t);
         Zip::indexed(owner.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), o| {
             let c = Point3::from(grid.cell_center([x0 + i, y0 + j, z0 + k]));
-            if body.signed_distance(t, &c) < 0.0 {
+            // `signed_distance(t, c)` with the pose built once.
+            if body.signed_distance_local(&pose.inverse_transform_point(&c)) < 0.0 {
                 *o = index as u16;
             }
         });

@@ -7,7 +7,7 @@ use super::layout::Layout;
 use super::multigrid::Multigrid;
 use super::pcg::{self, Workspace};
 use super::poisson::{
-    check_settings, check_shape, coordinates, finish, load, SolveError, SolveStats, SolverSettings,
+    check_settings, check_shape, coordinates, finish, SolveError, SolveStats, SolverSettings,
 };
 use super::stencil::{FineStencil, Problem, DIRICHLET, FLUID};
 use crate::Real;
@@ -59,6 +59,31 @@ pub struct DiffusionSystem {
     stencil: FineStencil,
     multigrid: Multigrid,
     work: Workspace,
+    /// The unknowns next to fixed cells, with those neighbours: the only cells whose right-hand
+    /// side is not just their old value.
+    fixed_neighbours: Vec<(usize, Vec<usize>)>,
+}
+
+/// Every unknown with fixed (Dirichlet) neighbours, and their indices in the order the
+/// right-hand side adds them (axis by axis, lower neighbour first).
+fn fixed_neighbours(problem: &Problem) -> Vec<(usize, Vec<usize>)> {
+    let layout = problem.layout;
+    (0..layout.len())
+        .filter(|&idx| problem.kinds[idx] == FLUID)
+        .filter_map(|idx| {
+            let c = coordinates(&layout, idx);
+            let fixed: Vec<usize> = (0..3)
+                .flat_map(|axis| [false, true].map(|up| (axis, up)))
+                .filter_map(|(axis, up)| {
+                    let mut nb = c;
+                    nb[axis] = layout.step(axis, c[axis], up)?;
+                    let j = layout.index(nb[0], nb[1], nb[2]);
+                    (problem.kinds[j] == DIRICHLET).then_some(j)
+                })
+                .collect();
+            (!fixed.is_empty()).then_some((idx, fixed))
+        })
+        .collect()
 }
 
 impl DiffusionSystem {
@@ -97,14 +122,16 @@ impl DiffusionSystem {
         let dirichlet = problem.dirichlet_table();
         let stencil = FineStencil::new(&problem, &dirichlet);
         let multigrid = Multigrid::new(&problem, &stencil, &dirichlet);
+        let fixed_neighbours = fixed_neighbours(&problem);
         Ok(Self {
             unknown: unknown.clone(),
             boundary: *boundary,
             a,
-            problem,
             stencil,
             multigrid,
             work: Workspace::new(layout.len()),
+            fixed_neighbours,
+            problem,
         })
     }
 
@@ -122,7 +149,15 @@ impl DiffusionSystem {
         let (problem, layout, a) = (&self.problem, self.problem.layout, self.a);
         check_shape(&layout, "x", x)?;
         check_settings(settings)?;
-        if let Some(idx) = x.iter().position(|v| !v.is_finite()) {
+        let copy: Vec<Real>;
+        let old = match x.as_slice() {
+            Some(old) => old,
+            None => {
+                copy = x.iter().copied().collect();
+                &copy
+            }
+        };
+        if let Some(idx) = old.iter().position(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
                 what: "x",
                 cell: coordinates(&layout, idx),
@@ -132,30 +167,27 @@ impl DiffusionSystem {
             return Ok(SolveStats::default());
         }
         let work = &mut self.work;
-        load(&layout, "x", x, |i| problem.kinds[i] == FLUID, &mut work.x)?;
-        let old: Vec<f64> = x.iter().copied().collect();
-        // b = x_old + a * (sum of fixed neighbours) on the unknowns.
-        let rhs = |(idx, b): (usize, &mut f64)| {
-            if problem.kinds[idx] != FLUID {
-                return;
-            }
-            let c = coordinates(&layout, idx);
-            let mut fixed = 0.0;
-            for axis in 0..3 {
-                for up in [false, true] {
-                    if let Some(s) = layout.step(axis, c[axis], up) {
-                        let mut nb = c;
-                        nb[axis] = s;
-                        let j = layout.index(nb[0], nb[1], nb[2]);
-                        if problem.kinds[j] == DIRICHLET {
-                            fixed += old[j];
-                        }
-                    }
+        // The initial guess x_old on the unknowns (zero elsewhere), and b = x_old + a * (sum
+        // of fixed neighbours) there: x_old here (the sum is empty for all but the cells next
+        // to fixed ones, and x + a * 0 = x but for the sign of a zero), the fixed neighbours next.
+        work.x
+            .par_chunks_mut(layout.slab())
+            .zip(work.b.par_chunks_mut(layout.slab()))
+            .zip(old.par_chunks(layout.slab()))
+            .zip(problem.kinds.par_chunks(layout.slab()))
+            .for_each(|(((x, b), old), kinds)| {
+                for (((x, b), &old), &kind) in x.iter_mut().zip(b).zip(old).zip(kinds) {
+                    (*x, *b) = if kind == FLUID {
+                        (old, old)
+                    } else {
+                        (0.0, 0.0)
+                    };
                 }
-            }
-            *b = old[idx] + a * fixed;
-        };
-        work.b.par_iter_mut().enumerate().for_each(rhs);
+            });
+        for (cell, neighbours) in &self.fixed_neighbours {
+            let fixed = neighbours.iter().fold(0.0, |s, &j| s + old[j]);
+            work.b[*cell] = old[*cell] + a * fixed;
+        }
         let stats = SolveStats {
             levels: self.multigrid.depth(),
             ..Default::default()
@@ -175,10 +207,20 @@ impl DiffusionSystem {
             );
             finish(o, stats)
         };
-        for ((x, &v), &k) in x.iter_mut().zip(&work.x).zip(&problem.kinds) {
+        let store = |(x, (&v, &k)): (&mut Real, (&f64, &u8))| {
             if k == FLUID {
                 *x = v;
             }
+        };
+        match x.as_slice_mut() {
+            Some(xs) => xs
+                .iter_mut()
+                .zip(work.x.iter().zip(&problem.kinds))
+                .for_each(store),
+            None => x
+                .iter_mut()
+                .zip(work.x.iter().zip(&problem.kinds))
+                .for_each(store),
         }
         result
     }

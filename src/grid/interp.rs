@@ -3,7 +3,7 @@
 //! face component along axis a has offset 0 on a. Periodic axes wrap, the others clamp to the
 //! outermost samples (zero-gradient extrapolation beyond the domain).
 
-use ndarray::Array3;
+use ndarray::{Array3, ArrayRef, Ix3};
 
 use crate::Real;
 
@@ -38,18 +38,15 @@ impl Stagger {
 
     /// The two sample indices and the weight of the second along axis `a`, for a position
     /// `g` in cell units from the grid origin.
-    #[inline]
+    #[inline(always)]
     fn axis(&self, a: usize, g: Real) -> AxisWeights {
         axis_weights(g - self.offset[a], self.shape[a], self.period[a])
     }
 
-    /// The eight samples around position `g` (cell units from the grid origin), x fastest,
-    /// and the weights along x, y, z.
-    #[inline]
-    fn corners(&self, field: &Array3<Real>, g: [Real; 3]) -> ([Real; 8], [Real; 3]) {
-        let data = field
-            .as_slice()
-            .expect("grid fields are in standard layout");
+    /// The eight samples of `data` (the field's standard-layout array as a slice) around
+    /// position `g` (cell units from the grid origin), x fastest, and the weights along x, y, z.
+    #[inline(always)]
+    fn corners(&self, data: &[Real], g: [Real; 3]) -> ([Real; 8], [Real; 3]) {
         corners(
             data,
             self.shape,
@@ -57,11 +54,15 @@ impl Stagger {
         )
     }
 
-    /// The field at position `g` (cell units from the grid origin), with the smallest and
-    /// largest of the samples it was interpolated from.
-    #[inline]
-    pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
-        let (c, f) = self.corners(field, g);
+    /// The field whose standard-layout array is `data` at position `g` (cell units from the
+    /// grid origin), with the smallest and largest of the samples it was interpolated from.
+    #[inline(always)]
+    pub(crate) fn sample_slice_with_range(
+        &self,
+        data: &[Real],
+        g: [Real; 3],
+    ) -> (Real, Real, Real) {
+        let (c, f) = self.corners(data, g);
         let (lo, hi) = c
             .iter()
             .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), &v| {
@@ -70,11 +71,25 @@ impl Stagger {
         (trilinear(&c, f), lo, hi)
     }
 
+    /// The field whose standard-layout array is `data` at position `g` (cell units from the
+    /// grid origin): [`Self::sample`] without the layout check, for loops over many samples.
+    #[inline(always)]
+    pub(crate) fn sample_slice(&self, data: &[Real], g: [Real; 3]) -> Real {
+        let (c, f) = self.corners(data, g);
+        trilinear(&c, f)
+    }
+
+    /// The field at position `g` (cell units from the grid origin), with the smallest and
+    /// largest of the samples it was interpolated from.
+    #[inline]
+    pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
+        self.sample_slice_with_range(standard(field), g)
+    }
+
     /// The field at position `g` (cell units from the grid origin).
     #[inline]
     pub fn sample(&self, field: &Array3<Real>, g: [Real; 3]) -> Real {
-        let (c, f) = self.corners(field, g);
-        trilinear(&c, f)
+        self.sample_slice(standard(field), g)
     }
 
     /// The axis whose faces the samples sit on, or None for cell centres.
@@ -89,8 +104,17 @@ impl Stagger {
     }
 }
 
+/// The elements of a grid field in standard layout (as the grid makes them; callers that take
+/// arrays from outside pass them through `as_standard_layout` first).
+#[inline(always)]
+pub(crate) fn standard(field: &ArrayRef<Real, Ix3>) -> &[Real] {
+    field
+        .as_slice()
+        .expect("grid fields are in standard layout")
+}
+
 /// Trilinear interpolation of eight corner values (x fastest) at weights `f`.
-#[inline]
+#[inline(always)]
 pub(crate) fn trilinear(c: &[Real; 8], f: [Real; 3]) -> Real {
     let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
     let x00 = lerp(c[0], c[1], f[0]);
@@ -105,39 +129,48 @@ pub(crate) type AxisWeights = (usize, usize, Real);
 
 /// The samples around coordinate `c` (in samples) on an axis of `len` samples: wrapped with
 /// period `period`, or clamped to the end samples (zero weight beyond them).
-#[inline]
+#[inline(always)]
 pub(crate) fn axis_weights(c: Real, len: usize, period: Option<usize>) -> AxisWeights {
+    let Some(n) = period else {
+        return clamped_axis_weights(c, len);
+    };
     // floor by truncation: `f64::floor` is a libm call on baseline x86-64.
     let t = c as isize;
     let i0 = if (t as Real) > c { t - 1 } else { t };
     let f = c - i0 as Real;
-    match period {
-        Some(n) => {
-            let n = n as isize;
-            let lo = if (0..n).contains(&i0) {
-                i0
-            } else {
-                i0.rem_euclid(n)
-            };
-            let hi = if lo + 1 == n { 0 } else { lo + 1 };
-            (lo as usize, hi as usize, f)
-        }
-        None => {
-            let last = len as isize - 1;
-            if i0 < 0 {
-                (0, 0, 0.0)
-            } else if i0 >= last {
-                (last as usize, last as usize, 0.0)
-            } else {
-                (i0 as usize, i0 as usize + 1, f)
-            }
-        }
+    let n = n as isize;
+    let lo = if (0..n).contains(&i0) {
+        i0
+    } else {
+        i0.rem_euclid(n)
+    };
+    let hi = if lo + 1 == n { 0 } else { lo + 1 };
+    (lo as usize, hi as usize, f)
+}
+
+/// [`axis_weights`] on an axis that clamps: the range test comes first, so that inside it the
+/// floor is a plain truncation (the saturating `as` conversion costs a third of the call on
+/// the advection's hot path). A NaN coordinate gives a NaN weight, which carries it on.
+#[inline(always)]
+fn clamped_axis_weights(c: Real, len: usize) -> AxisWeights {
+    let last = len.saturating_sub(1);
+    let end = last as i64 as Real;
+    if c >= 0.0 && c < end {
+        // SAFETY: 0 <= c < last (finite, so not NaN), so c truncates to an integer in range.
+        let i0 = unsafe { c.to_int_unchecked::<i64>() };
+        (i0 as usize, i0 as usize + 1, c - i0 as Real)
+    } else if c >= end {
+        (last, last, 0.0)
+    } else if c < 0.0 || last == 0 {
+        (0, 0, 0.0)
+    } else {
+        (0, 1, c)
     }
 }
 
 /// The eight samples of a standard-layout array of `shape` at the given axis weights, x
 /// fastest, and the weights.
-#[inline]
+#[inline(always)]
 pub(crate) fn corners(
     data: &[Real],
     shape: [usize; 3],
@@ -159,4 +192,55 @@ pub(crate) fn corners(
         ],
         [fx, fy, fz],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The clamped weights by their definition: the floor of the coordinate, clamped to the
+    /// end samples with zero weight beyond them; the weight is the coordinate less the index.
+    fn by_floor(c: Real, len: usize) -> AxisWeights {
+        let last = len - 1;
+        let fl = c.floor();
+        if fl < 0.0 {
+            (0, 0, 0.0)
+        } else if fl >= last as Real {
+            (last, last, 0.0)
+        } else {
+            (fl as usize, fl as usize + 1, c - (fl as usize) as Real)
+        }
+    }
+
+    /// The clamped weights (range test first, then truncation) are the floor's, bit for bit,
+    /// at random coordinates inside and beyond the axis, at the samples themselves, just off
+    /// them and at the ends; a NaN coordinate gives a NaN weight.
+    #[test]
+    fn clamped_axis_weights_follow_the_floor() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for len in [1, 2, 3, 17] {
+            let l = len as Real;
+            let mut coords: Vec<Real> =
+                (0..2000).map(|_| rng.random_range(-3.0..l + 3.0)).collect();
+            for s in -2..=len as i32 + 2 {
+                let s = s as Real;
+                coords.extend([s, s - 1e-15, s + 1e-15, s - 0.5, -0.0]);
+            }
+            for c in coords {
+                let (i0, i1, f) = axis_weights(c, len, None);
+                let (j0, j1, g) = by_floor(c, len);
+                assert!(
+                    (i0, i1) == (j0, j1) && f.to_bits() == g.to_bits(),
+                    "len {len}, c = {c:e}: {:?} against {:?}",
+                    (i0, i1, f),
+                    (j0, j1, g)
+                );
+            }
+            if len > 1 {
+                assert!(axis_weights(Real::NAN, len, None).2.is_nan());
+            }
+        }
+    }
 }

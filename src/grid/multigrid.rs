@@ -90,15 +90,24 @@ fn relax_class<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &mut [f32], 
                 continue;
             }
             let row = Row::new(l, i, j);
-            for k in ((i + j + parity) % 2..l.n[2]).step_by(2) {
-                if z_groups && gij + l.group_of(2, k) != group {
-                    continue;
-                }
+            let first = (i + j + parity) % 2;
+            // SAFETY: indices come from the layout (in range); the neighbours read are of
+            // other colour classes than the cell written, which this class never writes.
+            // (`move`: the closures hold their own copy of the pointer, which the compiler
+            // then keeps in a register instead of reloading it after every raw write.)
+            let read = move |m: usize| unsafe { xs.read(m) };
+            let update = move |k: usize, s: f32| {
                 let c = row.base() + k;
-                // SAFETY: indices come from the layout (in range); the neighbours read are of
-                // other colour classes than `c`, which this class never writes.
-                let s: f32 = row.face_sum(k, coef, |m| unsafe { xs.read(m) });
                 unsafe { xs.write(c, (b[c] + scale * s) * coef.inv_diagonal(c)) };
+            };
+            if !z_groups {
+                row.face_sums(first, 2, coef, read, update);
+                continue;
+            }
+            for k in (first..l.n[2]).step_by(2) {
+                if gij + l.group_of(2, k) == group {
+                    update(k, row.face_sum(k, coef, read));
+                }
             }
         }
     });
@@ -161,11 +170,17 @@ fn residual<C: Coefficients>(l: &Layout, coef: &C, b: &[f32], x: &[f32], r: &mut
     let slab = |(i, rs): (usize, &mut [f32])| {
         for j in 0..l.n[1] {
             let row = Row::new(l, i, j);
-            for k in 0..l.n[2] {
-                let c = row.base() + k;
-                let s: f32 = row.face_sum(k, coef, |m| x[m]);
-                rs[j * l.n[2] + k] = b[c] - coef.diagonal(c) * x[c] + scale * s;
-            }
+            let out = &mut rs[j * l.n[2]..][..l.n[2]];
+            row.face_sums(
+                0,
+                1,
+                coef,
+                |m| x[m],
+                |k, s: f32| {
+                    let c = row.base() + k;
+                    out[k] = b[c] - coef.diagonal(c) * x[c] + scale * s;
+                },
+            );
         }
     };
     if l.len() >= PARALLEL_MIN_CELLS {

@@ -5,8 +5,10 @@
 //! not updated, which is the Neumann condition A leaves out; open sides hold y = 0.
 
 use ndarray::{Array3, Zip};
+use rayon::prelude::*;
 
 use super::boundary::Boundaries;
+use super::interp::standard;
 use super::mac::{cells_beside_face, MacGrid};
 use super::poisson::{PoissonSystem, SolveError, SolveStats, SolverSettings};
 use crate::Real;
@@ -20,34 +22,66 @@ pub fn project(
     y: &mut Array3<Real>,
     settings: &SolverSettings,
 ) -> Result<SolveStats, SolveError> {
-    let mut rhs = grid.net_outflow();
-    rhs.mapv_inplace(|d| -d);
+    let mut rhs = Array3::zeros(grid.dims);
+    grid.net_outflow_scaled(-1.0, &mut rhs);
     let stats = system.solve(&rhs, y, settings)?;
     subtract_gradient(grid, bounds, y);
     grid.sync_periodic();
     Ok(stats)
 }
 
-/// u -= y_right - y_left on every face that is not fixed; y is 0 beyond an open side.
+/// u -= y_right - y_left on every face that is not fixed; y is 0 beyond an open side. Row by
+/// row over flat slices: a row of faces along z, and the one or two rows of cells beside it.
 fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) {
-    let dims = grid.dims;
+    let [n0, n1, n2] = grid.dims;
     let periodic = bounds.periodic();
+    let y = y.as_standard_layout();
+    let y = standard(&y);
+    let cell_row = |i: usize, j: usize| &y[(i * n1 + j) * n2..][..n2];
     for a in 0..3 {
-        let n = dims[a];
-        Zip::indexed(&mut grid.u[a])
-            .and(&bounds.fixed[a])
-            .par_for_each(|(i, j, k), u, &fixed| {
-                if fixed {
-                    return;
+        let fixed = bounds.fixed[a]
+            .as_slice()
+            .expect("face masks are in standard layout");
+        let u = grid.u[a]
+            .as_slice_mut()
+            .expect("face arrays are in standard layout");
+        let [m1, m2] = [n1 + usize::from(a == 1), n2 + usize::from(a == 2)];
+        if u.is_empty() {
+            continue;
+        }
+        u.par_chunks_mut(m1 * m2)
+            .zip(fixed.par_chunks(m1 * m2))
+            .enumerate()
+            .for_each(|(i, (slab, fixed))| {
+                for (j, (row, fixed)) in slab.chunks_mut(m2).zip(fixed.chunks(m2)).enumerate() {
+                    if a == 2 {
+                        let cells = cell_row(i, j);
+                        for (k, (u, &f)) in row.iter_mut().zip(fixed).enumerate() {
+                            let (l, r) = cells_beside_face(k, n2, periodic[2]);
+                            if !f {
+                                *u -= r.map_or(0.0, |c| cells[c]) - l.map_or(0.0, |c| cells[c]);
+                            }
+                        }
+                        continue;
+                    }
+                    let (face, n) = if a == 0 { (i, n0) } else { (j, n1) };
+                    let beside = |c: Option<usize>| {
+                        c.map(|c| {
+                            if a == 0 {
+                                cell_row(c, j)
+                            } else {
+                                cell_row(i, c)
+                            }
+                        })
+                    };
+                    let (l, r) = cells_beside_face(face, n, periodic[a]);
+                    let (l, r) = (beside(l), beside(r));
+                    for (k, (u, &f)) in row.iter_mut().zip(fixed).enumerate() {
+                        if !f {
+                            *u -= r.map_or(0.0, |c| c[k]) - l.map_or(0.0, |c| c[k]);
+                        }
+                    }
                 }
-                let idx = [i, j, k];
-                let at = |c: usize| {
-                    let mut cell = idx;
-                    cell[a] = c;
-                    y[cell]
-                };
-                let (left, right) = cells_beside_face(idx[a], n, periodic[a]);
-                *u -= right.map_or(0.0, at) - left.map_or(0.0, at);
             });
     }
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use ndarray::{Array3, Zip};
 
-use super::advect::{advect, advect_velocity};
+use super::advect::{advect, advect_velocity, advect_velocity_into};
 use super::average::RunningAverage;
 use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
@@ -126,6 +126,10 @@ pub struct GridSolver {
     diffusion: [Option<DiffusionSystem>; 3],
     /// p dt / (rho dx) of the last projection: the next solve's warm start.
     scaled_pressure: Array3<Real>,
+    /// The advected velocity of a step, swapped with `mac.u` (no allocation per step).
+    advected: [Array3<Real>; 3],
+    /// The velocity at the start of a step, for [`GridStepStats::change_rate`].
+    before: [Array3<Real>; 3],
     settings: Settings,
     time: Real,
     step: u64,
@@ -189,6 +193,8 @@ impl GridSolver {
         Ok(Self {
             pressure: Array3::zeros(mac.dims),
             scaled_pressure: Array3::zeros(mac.dims),
+            advected: mac.u.clone(),
+            before: mac.u.clone(),
             mac,
             bounds,
             bodies,
@@ -238,13 +244,15 @@ impl GridSolver {
     /// Advances one step.
     pub fn advance(&mut self, dt_limit: Option<Real>) -> Result<GridStepStats, GridError> {
         let started = Instant::now();
+        let (dt, speed) = self.step_size(dt_limit)?;
         let mut stats = GridStepStats {
-            dt: self.step_size(dt_limit)?,
+            dt,
+            cfl: speed * dt / self.mac.dx,
             ..Default::default()
         };
-        let dt = stats.dt;
-        stats.cfl = self.mac.max_face_speed() * dt / self.mac.dx;
-        let before = self.mac.u.clone();
+        for (before, u) in self.before.iter_mut().zip(&self.mac.u) {
+            before.clone_from(u);
+        }
         if self.bodies.iter().any(RigidBody::is_moving) {
             let sides = self.bounds.sides;
             self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
@@ -269,7 +277,8 @@ impl GridSolver {
         if self.settings.reflection {
             self.reflected_update(dt, &mut stats)?;
         } else {
-            self.mac.u = advect_velocity(&self.mac, dt, scheme);
+            advect_velocity_into(&self.mac, dt, scheme, &mut self.advected);
+            std::mem::swap(&mut self.mac.u, &mut self.advected);
             self.body_forces_and_viscosity(dt, &mut stats)?;
             let t1 = Instant::now();
             let solve = self.project(dt)?;
@@ -282,7 +291,7 @@ impl GridSolver {
         self.time += dt;
         self.step += 1;
         stats.max_divergence = max_divergence(&self.mac, &self.bounds.fluid_mask());
-        stats.change_rate = change_rate(&before, &self.mac.u) / dt;
+        stats.change_rate = change_rate(&self.before, &self.mac.u) / dt;
         if let Some((start, avg)) = self.average.as_mut() {
             if self.time > *start {
                 avg.add(&self.mac, dt.min(self.time - *start));
@@ -352,8 +361,9 @@ impl GridSolver {
         Ok(())
     }
 
-    /// The CFL step, or the fixed step; shortened to `limit` (the end time or next frame).
-    fn step_size(&self, limit: Option<Real>) -> Result<Real, GridError> {
+    /// The CFL step, or the fixed step, shortened to `limit` (the end time or next frame), and
+    /// the largest face speed it was chosen for.
+    fn step_size(&self, limit: Option<Real>) -> Result<(Real, Real), GridError> {
         let s = &self.settings;
         let speed = self.mac.max_face_speed();
         let dt = s.fixed_dt.unwrap_or_else(|| {
@@ -373,7 +383,10 @@ impl GridSolver {
                 ),
             });
         }
-        Ok(limit.map_or(dt, |l| crate::stepping::towards_end(dt, l)))
+        Ok((
+            limit.map_or(dt, |l| crate::stepping::towards_end(dt, l)),
+            speed,
+        ))
     }
 
     /// Buoyancy and vorticity confinement, and the smoke sources.

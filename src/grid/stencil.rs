@@ -192,6 +192,36 @@ impl Row {
         self.base
     }
 
+    /// Calls `f(k, sum_j w_ij v_j)` (unscaled, over the six faces of cell `base + k`) for
+    /// `k = first, first + step, ...` along the row. The two end cells take the general path
+    /// (z wrap or missing neighbour); the cells between need no z checks.
+    #[inline(always)]
+    pub fn face_sums<V, C>(
+        &self,
+        first: usize,
+        step: usize,
+        coef: &C,
+        get: impl Fn(usize) -> V,
+        mut f: impl FnMut(usize, V),
+    ) where
+        V: Copy + Add<Output = V> + Mul<Output = V> + From<f32>,
+        C: Coefficients + ?Sized,
+    {
+        let mut k = first;
+        if k == 0 && self.nz > 0 {
+            f(0, self.face_sum(0, coef, &get));
+            k += step;
+        }
+        while k + 1 < self.nz {
+            let c = self.base + k;
+            f(k, self.sum(k, c - 1, 1.0, c + 1, coef, &get));
+            k += step;
+        }
+        if k + 1 == self.nz {
+            f(k, self.face_sum(k, coef, &get));
+        }
+    }
+
     /// `sum_j w_ij v_j` over the six faces of cell `base + k` (unscaled).
     #[inline(always)]
     pub fn face_sum<V, C>(&self, k: usize, coef: &C, get: impl Fn(usize) -> V) -> V
@@ -215,6 +245,25 @@ impl Row {
         } else {
             c
         };
+        self.sum(k, zm, mask_zm, zp, coef, get)
+    }
+
+    /// [`Self::face_sum`] with the z neighbours `zm` (weighted by `mask_zm`) and `zp` given.
+    #[inline(always)]
+    fn sum<V, C>(
+        &self,
+        k: usize,
+        zm: usize,
+        mask_zm: f32,
+        zp: usize,
+        coef: &C,
+        get: impl Fn(usize) -> V,
+    ) -> V
+    where
+        V: Copy + Add<Output = V> + Mul<Output = V> + From<f32>,
+        C: Coefficients + ?Sized,
+    {
+        let c = self.base + k;
         if coef.unit_faces(c) {
             return get(self.xp + k)
                 + get(self.xm + k)
@@ -289,14 +338,20 @@ impl FineStencil {
             let mut dot = 0.0;
             for j in 0..l.n[1] {
                 let row = Row::new(&l, i, j);
-                for k in 0..l.n[2] {
-                    let c = row.base + k;
-                    let s: f64 = row.face_sum(k, &coef, |m| x[m]);
-                    let v =
-                        self.diag[usize::from(self.code[c] >> COUNT_SHIFT)] * x[c] - self.scale * s;
-                    ys[j * l.n[2] + k] = v;
-                    dot += v * x[c];
-                }
+                let out = &mut ys[j * l.n[2]..][..l.n[2]];
+                row.face_sums(
+                    0,
+                    1,
+                    &coef,
+                    |m| x[m],
+                    |k, s: f64| {
+                        let c = row.base + k;
+                        let v = self.diag[usize::from(self.code[c] >> COUNT_SHIFT)] * x[c]
+                            - self.scale * s;
+                        out[k] = v;
+                        dot += v * x[c];
+                    },
+                );
             }
             dot
         };

@@ -30,7 +30,7 @@
 //! beta = 1). The core radius is therefore capped at that bound: below it the method never
 //! gives back more than was lost at any scale, which is the paper's stability argument.
 
-use super::{add_scaled, Refiner, StepContext};
+use super::{Refiner, StepContext};
 use crate::sph::neighbors::permute;
 use crate::sph::operators::WallField;
 use crate::sph::Neighborhood;
@@ -43,23 +43,26 @@ pub const OSEEN: Real = 1.25643;
 /// Rankine refinement with core-radius factor beta.
 pub struct Rankine {
     beta: Real,
-    /// omega^(n-1), per fluid particle; None before the first step.
-    previous: Option<Vec<Vec3>>,
+    /// omega^(n-1), per fluid particle; empty before the first step.
+    previous: Vec<Vec3>,
+    /// The lost vorticity omega^(n-1) - omega^n of the step (kept to reuse its memory).
+    lost: Vec<Vec3>,
 }
 
 impl Rankine {
     pub fn new(beta: Real) -> Self {
         Self {
             beta,
-            previous: None,
+            previous: Vec::new(),
+            lost: Vec::new(),
         }
     }
 }
 
 impl Refiner for Rankine {
     fn permute(&mut self, perm: &[u32]) {
-        if let Some(p) = self.previous.as_mut() {
-            permute(p, perm);
+        if self.previous.len() == perm.len() {
+            permute(&mut self.previous, perm);
         }
     }
 
@@ -67,30 +70,39 @@ impl Refiner for Rankine {
         if self.beta == 0.0 {
             return;
         }
-        let mut omega = ctx.ops.curl(v, WallField::Velocity);
+        let ops = &ctx.ops;
         let rc = core_radius(
             self.beta,
             ctx.nu,
             ctx.dt,
             ctx.spacing,
-            ctx.ops.nb.kernel.support(),
+            ops.nb.kernel.support(),
         );
-        if let Some(previous) = self.previous.as_ref().filter(|p| p.len() == v.len()) {
-            if rc > 0.0 {
-                let lost: Vec<Vec3> = previous
-                    .par_iter()
-                    .zip(omega.par_iter())
-                    .map(|(before, now)| before - now)
-                    .collect();
-                let dv = induced_velocity(&ctx.ops.nb, &lost, rc);
-                add_scaled(v, &dv, 1.0);
-                // curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
-                omega.par_iter_mut().enumerate().for_each(|(i, w)| {
-                    *w += ctx.ops.curl_at(i, &dv, WallField::Zero);
-                });
-            }
+        if self.previous.len() != v.len() || rc == 0.0 {
+            self.previous = ops.curl(v, WallField::Velocity);
+            return;
         }
-        self.previous = Some(omega);
+        // omega^n and the loss in one pass; `previous` becomes omega^n.
+        let now: &[Vec3] = v;
+        self.lost.resize(now.len(), Vec3::zeros());
+        self.previous
+            .par_iter_mut()
+            .zip(self.lost.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (previous, lost))| {
+                let omega = ops.curl_at(i, now, WallField::Velocity);
+                *lost = *previous - omega;
+                *previous = omega;
+            });
+        let dv = induced_velocity(&ops.nb, &self.lost, rc);
+        // v + dv, and curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
+        v.par_iter_mut()
+            .zip(self.previous.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (v, omega))| {
+                *v += dv[i];
+                *omega += ops.curl_at(i, &dv, WallField::Zero);
+            });
     }
 }
 

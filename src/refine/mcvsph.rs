@@ -1,8 +1,10 @@
 //! Monte Carlo vortical SPH (Ye et al., Algorithms 1 and 2, Eqs. 18–29).
 //!
 //! - At v^n (after the divergence solve): omega^n = curl v^n (Eq. 21, with the curl's sign
-//!   fixed, see `crate::sph::operators`) and its ideal successor
-//!   omega^(n+1) = omega^n + dt ((omega^n . grad) v + nu Laplacian omega^n) (Eq. 18, Alg. 1).
+//!   fixed, see `crate::sph::operators`) and the stretching (omega^n . grad) v^n of its ideal
+//!   successor omega^(n+1) = omega^n + dt ((omega^n . grad) v + nu Laplacian omega^n) (Eq. 18,
+//!   Alg. 1). The Laplacian of omega^n is taken after the pressure solve, in the pass that
+//!   takes the curl there: the positions have not moved in between, so it is the same sum.
 //!   Algorithm 1 stretches with the gradient of v~ = v^n + dt f_non-pressure; we use the
 //!   gradient of v^n, which differs only by dt times the gradient of the viscous acceleration
 //!   (gravity is uniform and drops out), and saves a pass.
@@ -33,14 +35,13 @@
 
 use super::{add_scaled, Refiner, StepContext};
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, Mat3, Operators, WallField};
+use crate::sph::operators::{curl_of, per_particle, Operators, WallField};
 use crate::{Real, Vec3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::biot_savart::{biot_savart, BiotSavartTree};
-use super::vrsph::evolve_vorticity;
 
 /// MCVSPH state.
 pub struct Mcvsph {
@@ -49,8 +50,10 @@ pub struct Mcvsph {
     theta: Real,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
-    /// The ideal vorticity omega^(n+1) of the current step (on `reach` only).
-    ideal: Vec<Vec3>,
+    /// omega^n = curl v^n of the current step, on `reach` and one neighbourhood further.
+    omega: Vec<Vec3>,
+    /// The stretching (omega^n . grad) v^n, on `reach`.
+    stretch: Vec<Vec3>,
     /// The vortex particles and their fluid neighbours this step: the only particles whose
     /// loss the smoothing of Eq. 28 reads.
     reach: Vec<bool>,
@@ -69,7 +72,8 @@ impl Mcvsph {
             volume_coefficient,
             theta,
             sampled,
-            ideal: Vec::new(),
+            omega: Vec::new(),
+            stretch: Vec::new(),
             reach: Vec::new(),
         }
     }
@@ -113,34 +117,40 @@ impl Refiner for Mcvsph {
         // neighbourhood further the curl is enough.
         self.reach = self.near_samples(ops);
         let reach = &self.reach;
-        let (grad, omega): (Vec<Mat3>, Vec<Vec3>) = (0..v.len())
+        (self.stretch, self.omega) = (0..v.len())
             .into_par_iter()
             .map(|i| {
                 if reach[i] {
                     let g = ops.gradient_at(i, v, WallField::Velocity);
-                    (g, curl_of(&g))
+                    let omega = curl_of(&g);
+                    (g * omega, omega)
                 } else if ops.nb.fluid.of(i).iter().any(|&j| reach[j as usize]) {
-                    (Mat3::zeros(), ops.curl_at(i, v, WallField::Velocity))
+                    (Vec3::zeros(), ops.curl_at(i, v, WallField::Velocity))
                 } else {
-                    (Mat3::zeros(), Vec3::zeros())
+                    (Vec3::zeros(), Vec3::zeros())
                 }
             })
             .unzip();
-        self.ideal = evolve_vorticity(ops, &omega, &grad, (ctx.nu, ctx.dt), Some(reach));
     }
 
     fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
-        if self.volume_coefficient == 0.0 || self.ideal.len() != v.len() {
+        if self.volume_coefficient == 0.0 || self.omega.len() != v.len() {
             return;
         }
         let ops = &ctx.ops;
-        let now = ops.curl_on(v, WallField::Velocity, Some(&self.reach));
-        let loss: Vec<Vec3> = self
-            .ideal
-            .par_iter()
-            .zip(now.par_iter())
-            .map(|(ideal, now)| ideal - now)
-            .collect();
+        let (omega, stretch, (nu, dt)) = (&self.omega, &self.stretch, (ctx.nu, ctx.dt));
+        // The ideal omega^(n+1) = omega^n + dt ((omega^n . grad) v^n + nu Laplacian omega^n)
+        // (Eq. 18, Alg. 1) less the curl after the projection (Eq. 20), in one pass: the
+        // positions have not moved since omega^n was taken, so its Laplacian is the same here.
+        let now: &[Vec3] = v;
+        let loss = per_particle(v.len(), Some(&self.reach), |i| {
+            let (curl, laplacian) = if nu > 0.0 {
+                ops.curl_laplacian_at(i, now, omega)
+            } else {
+                (ops.curl_at(i, now, WallField::Velocity), Vec3::zeros())
+            };
+            omega[i] + dt * (stretch[i] + nu * laplacian) - curl
+        });
         let samples: Vec<usize> = (0..v.len()).filter(|&i| self.sampled[i]).collect();
         let k = ops.nb.kernel;
         // Smoothed loss at each vortex particle (Eq. 28; walls carry none), times its volume.

@@ -37,7 +37,7 @@
 
 use super::{Refiner, StepContext};
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, per_particle, Mat3, Operators, WallField};
+use crate::sph::operators::{curl_of, Operators, WallField};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -80,7 +80,7 @@ impl Refiner for Vrsph {
                 .into_par_iter()
                 .map(|i| {
                     let (now, lap) = if nu > 0.0 {
-                        ops.curl_laplacian_at(i, Some(v), (zeta, WallField::Zero))
+                        ops.curl_laplacian_at(i, v, zeta)
                     } else {
                         (ops.curl_at(i, v, WallField::Velocity), Vec3::zeros())
                     };
@@ -103,26 +103,6 @@ impl Refiner for Vrsph {
             })
             .unzip();
     }
-}
-
-/// One explicit step of the vorticity equation (Liu Eq. 7, Ye Eq. 18):
-/// zeta + dt ((zeta . grad) v + nu Laplacian zeta), with the stretching of Liu Eq. 9 from the
-/// gradient tensors and the Laplacian of Ye Eq. 8 (walls hold zero vorticity); only where
-/// `only` holds (zero elsewhere), or everywhere for None.
-pub fn evolve_vorticity(
-    ops: &Operators,
-    zeta: &[Vec3],
-    grad: &[Mat3],
-    (nu, dt): (Real, Real),
-    only: Option<&[bool]>,
-) -> Vec<Vec3> {
-    per_particle(zeta.len(), only, |i| {
-        let mut rate = grad[i] * zeta[i];
-        if nu > 0.0 {
-            rate += nu * ops.laplacian_at(i, zeta, WallField::Zero);
-        }
-        zeta[i] + dt * rate
-    })
 }
 
 /// The regularisation length e of Eq. 15 for a particle of rest volume `volume` (see the

@@ -112,59 +112,24 @@ impl<'a> Operators<'a> {
         c
     }
 
-    /// Laplacian (Ye Eq. 8, d = 3) of the field `a`.
-    pub fn laplacian(&self, a: &[Vec3], wall: WallField) -> Vec<Vec3> {
-        self.laplacian_on(a, wall, None)
-    }
-
-    /// [`Self::laplacian`] only where `only` holds (zero elsewhere), or everywhere for None.
-    pub fn laplacian_on(&self, a: &[Vec3], wall: WallField, only: Option<&[bool]>) -> Vec<Vec3> {
-        per_particle(a.len(), only, |i| self.laplacian_at(i, a, wall))
-    }
-
-    /// [`Self::laplacian`] at particle i.
+    /// The curl of `v` (walls at their velocity) and the Laplacian (Ye Eq. 8, d = 3) of the
+    /// vorticity-like field `a` (walls hold zero) at particle i, in one pass over its
+    /// neighbours: VRSPH and MCVSPH read both at the same point of the step.
     #[inline]
-    pub fn laplacian_at(&self, i: usize, a: &[Vec3], wall: WallField) -> Vec3 {
-        self.curl_laplacian_at(i, None, (a, wall)).1
-    }
-
-    /// The curl of `v` (walls at their velocity) and the Laplacian of `a` (walls holding
-    /// `a_wall`) at particle i, in one pass over its neighbours: VRSPH reads both at the same
-    /// point of the step (Liu et al. Algorithm 2). Without `v` the curl is zero.
-    #[inline]
-    pub fn curl_laplacian_at(
-        &self,
-        i: usize,
-        v: Option<&[Vec3]>,
-        (a, a_wall): (&[Vec3], WallField),
-    ) -> (Vec3, Vec3) {
+    pub fn curl_laplacian_at(&self, i: usize, v: &[Vec3], a: &[Vec3]) -> (Vec3, Vec3) {
         let eps = 0.01 * self.nb.kernel.support() * self.nb.kernel.support();
-        let ai = a[i];
+        let (vi, ai) = (v[i], a[i]);
         let (mut c, mut l) = (Vec3::zeros(), Vec3::zeros());
-        match v {
-            Some(v) => {
-                let vi = v[i];
-                self.nb.fluid_pairs_grad(i, |j, xij, grad| {
-                    let vj = self.volume[j];
-                    c += vj * (vi - v[j]).cross(&grad);
-                    l += (vj * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
-                })
-            }
-            None => self.nb.fluid_pairs_grad(i, |j, xij, grad| {
-                l += (self.volume[j] * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
-            }),
-        }
+        self.nb.fluid_pairs_grad(i, |j, xij, grad| {
+            let vj = self.volume[j];
+            c += vj * (vi - v[j]).cross(&grad);
+            l += (vj * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
+        });
         if self.walls {
             let b = self.nb.boundary;
             self.nb.boundary_pairs_grad(i, |k, xik, grad| {
-                if let Some(v) = v {
-                    c += b.volume[k] * (v[i] - b.v[k]).cross(&grad);
-                }
-                let ak = match a_wall {
-                    WallField::Velocity => b.v[k],
-                    WallField::Zero => Vec3::zeros(),
-                };
-                l += (b.volume[k] * (ai - ak).dot(&xik) / (xik.norm_squared() + eps)) * grad;
+                c += b.volume[k] * (vi - b.v[k]).cross(&grad);
+                l += (b.volume[k] * ai.dot(&xik) / (xik.norm_squared() + eps)) * grad;
             });
         }
         (c, 10.0 * l)

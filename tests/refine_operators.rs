@@ -52,6 +52,14 @@ fn centre() -> Vec3 {
     Vec3::new(0.16, 0.16, 0.16)
 }
 
+/// The block in solid-body rotation v = W x (x - c) about its centre, and W.
+fn rotating_block() -> (SphSolver, Vec3) {
+    let mut s = solver(&block(false, "method = \"none\""));
+    let w = Vec3::new(0.3, -0.5, 0.8);
+    s.fluid.v = s.fluid.x.iter().map(|x| w.cross(&(x - centre()))).collect();
+    (s, w)
+}
+
 /// Curl of a solid-body rotation v = W x (x - c) is 2 W, sign included, one support away from
 /// the free surface; the gradient tensor is the rotation's matrix there, and the curl taken
 /// from the tensor equals the direct curl everywhere.
@@ -63,10 +71,7 @@ fn centre() -> Vec3 {
 /// (f32) kernel gradients, the ones the operators read.
 #[test]
 fn solid_body_rotation_has_curl_twice_the_angular_velocity() {
-    let scene = block(false, "method = \"none\"");
-    let mut s = solver(&scene);
-    let w = Vec3::new(0.3, -0.5, 0.8);
-    s.fluid.v = s.fluid.x.iter().map(|x| w.cross(&(x - centre()))).collect();
+    let (s, w) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
     let ops = Operators {
         nb: s.neighborhood(),
@@ -124,10 +129,7 @@ fn uniform_flow_has_zero_curl() {
 /// about 30 % weaker than nu says.
 #[test]
 fn laplacian_is_eq_8_and_vanishes_on_linear_fields() {
-    let scene = block(false, "method = \"none\"");
-    let mut s = solver(&scene);
-    let w = Vec3::new(0.3, -0.5, 0.8);
-    s.fluid.v = s.fluid.x.iter().map(|x| w.cross(&(x - centre()))).collect();
+    let (s, _) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
     let ops = Operators {
         nb: s.neighborhood(),

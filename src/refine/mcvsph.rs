@@ -144,12 +144,8 @@ impl Refiner for Mcvsph {
         // positions have not moved since omega^n was taken, so its Laplacian is the same here.
         let now: &[Vec3] = v;
         let loss = per_particle(v.len(), Some(&self.reach), |i| {
-            let (curl, laplacian) = if nu > 0.0 {
-                ops.curl_laplacian_at(i, now, omega)
-            } else {
-                (ops.curl_at(i, now, WallField::Velocity), Vec3::zeros())
-            };
-            omega[i] + dt * (stretch[i] + nu * laplacian) - curl
+            let (curl, diffusion) = ops.curl_diffusion_at(i, now, omega, nu);
+            omega[i] + dt * (stretch[i] + diffusion) - curl
         });
         let samples: Vec<usize> = (0..v.len()).filter(|&i| self.sampled[i]).collect();
         let k = ops.nb.kernel;

@@ -79,12 +79,8 @@ impl Refiner for Vrsph {
             let loss: Vec<Vec3> = (0..v.len())
                 .into_par_iter()
                 .map(|i| {
-                    let (now, lap) = if nu > 0.0 {
-                        ops.curl_laplacian_at(i, v, zeta)
-                    } else {
-                        (ops.curl_at(i, v, WallField::Velocity), Vec3::zeros())
-                    };
-                    zeta[i] + dt * (stretch[i] + nu * lap) - now
+                    let (now, diffusion) = ops.curl_diffusion_at(i, v, zeta, nu);
+                    zeta[i] + dt * (stretch[i] + diffusion) - now
                 })
                 .collect();
             let psi = stream_function(ops, &loss);

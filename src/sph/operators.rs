@@ -112,6 +112,20 @@ impl<'a> Operators<'a> {
         c
     }
 
+    /// The curl of `v` (walls at their velocity) and `nu` times the Laplacian of the
+    /// vorticity-like field `a` at particle i: [`Self::curl_laplacian_at`] where `nu` > 0, the
+    /// curl alone (and zero) otherwise. The vorticity equation's viscous term of VRSPH and
+    /// MCVSPH.
+    #[inline]
+    pub fn curl_diffusion_at(&self, i: usize, v: &[Vec3], a: &[Vec3], nu: Real) -> (Vec3, Vec3) {
+        if nu > 0.0 {
+            let (curl, laplacian) = self.curl_laplacian_at(i, v, a);
+            (curl, nu * laplacian)
+        } else {
+            (self.curl_at(i, v, WallField::Velocity), Vec3::zeros())
+        }
+    }
+
     /// The curl of `v` (walls at their velocity) and the Laplacian (Ye Eq. 8, d = 3) of the
     /// vorticity-like field `a` (walls hold zero) at particle i, in one pass over its
     /// neighbours: VRSPH and MCVSPH read both at the same point of the step.

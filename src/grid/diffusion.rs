@@ -207,20 +207,11 @@ impl DiffusionSystem {
             );
             finish(o, stats)
         };
-        let store = |(x, (&v, &k)): (&mut Real, (&f64, &u8))| {
+        // A standard-layout array's element iterator walks a slice.
+        for ((x, &v), &k) in x.iter_mut().zip(&work.x).zip(&problem.kinds) {
             if k == FLUID {
                 *x = v;
             }
-        };
-        match x.as_slice_mut() {
-            Some(xs) => xs
-                .iter_mut()
-                .zip(work.x.iter().zip(&problem.kinds))
-                .for_each(store),
-            None => x
-                .iter_mut()
-                .zip(work.x.iter().zip(&problem.kinds))
-                .for_each(store),
         }
         result
     }

@@ -79,13 +79,6 @@ impl Stagger {
         trilinear(&c, f)
     }
 
-    /// The field at position `g` (cell units from the grid origin), with the smallest and
-    /// largest of the samples it was interpolated from.
-    #[inline]
-    pub fn sample_with_range(&self, field: &Array3<Real>, g: [Real; 3]) -> (Real, Real, Real) {
-        self.sample_slice_with_range(standard(field), g)
-    }
-
     /// The field at position `g` (cell units from the grid origin).
     #[inline]
     pub fn sample(&self, field: &Array3<Real>, g: [Real; 3]) -> Real {

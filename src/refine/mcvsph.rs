@@ -34,8 +34,10 @@
 //! cheaper); its error is a small fraction of the Monte Carlo error.
 
 use super::{add_scaled, Refiner, StepContext};
+use crate::sph::lanes::map_fast;
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, per_particle, Operators, WallField};
+use crate::sph::operators::{curl_of, Operators, WallField};
+use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -50,8 +52,9 @@ pub struct Mcvsph {
     theta: Real,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
-    /// omega^n = curl v^n of the current step, on `reach` and one neighbourhood further.
-    omega: Vec<Vec3>,
+    /// omega^n = curl v^n of the current step, on `reach` and one neighbourhood further,
+    /// packed (its Laplacian reads it at neighbours).
+    omega: Field,
     /// The stretching (omega^n . grad) v^n, on `reach`.
     stretch: Vec<Vec3>,
     /// The vortex particles and their fluid neighbours this step: the only particles whose
@@ -72,7 +75,7 @@ impl Mcvsph {
             volume_coefficient,
             theta,
             sampled,
-            omega: Vec::new(),
+            omega: Field::default(),
             stretch: Vec::new(),
             reach: Vec::new(),
         }
@@ -109,44 +112,45 @@ impl Refiner for Mcvsph {
         if self.volume_coefficient == 0.0 {
             return;
         }
-        let ops = &ctx.ops;
+        let ops = Packed::new(ctx.ops);
         // Only the loss next to a vortex particle is used (Eq. 28), so the ideal vorticity is
         // needed on `reach`, and the vorticity one neighbourhood further (its Laplacian): at
         // 1 % vortex particles that skips most of the curl and Laplacian work, with the same
         // result. The stretching term needs the whole gradient only on `reach`; one
         // neighbourhood further the curl is enough.
-        self.reach = self.near_samples(ops);
-        let reach = &self.reach;
-        (self.stretch, self.omega) = (0..v.len())
-            .into_par_iter()
-            .map(|i| {
-                if reach[i] {
-                    let g = ops.gradient_at(i, v, WallField::Velocity);
-                    let omega = curl_of(&g);
-                    (g * omega, omega)
-                } else if ops.nb.fluid.of(i).iter().any(|&j| reach[j as usize]) {
-                    (Vec3::zeros(), ops.curl_at(i, v, WallField::Velocity))
-                } else {
-                    (Vec3::zeros(), Vec3::zeros())
-                }
-            })
-            .unzip();
+        self.reach = self.near_samples(&ctx.ops);
+        let (reach, packed) = (&self.reach, ops.pack(v));
+        let near = map_fast(v.len(), None, |i| {
+            reach[i] || ops.ops.nb.fluid.of(i).iter().any(|&j| reach[j as usize])
+        });
+        let grad = map_fast(v.len(), Some(reach), |i| {
+            ops.gradient_at(i, &packed, WallField::Velocity)
+        });
+        self.omega = ops.field(Some(&near), |i| {
+            if reach[i] {
+                curl_of(&grad[i])
+            } else {
+                ops.curl_at(i, &packed, WallField::Velocity)
+            }
+        });
+        self.stretch = grad.par_iter().map(|g| g * curl_of(g)).collect();
     }
 
     fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
         if self.volume_coefficient == 0.0 || self.omega.len() != v.len() {
             return;
         }
-        let ops = &ctx.ops;
+        let ops = Packed::new(ctx.ops);
         let (omega, stretch, (nu, dt)) = (&self.omega, &self.stretch, (ctx.nu, ctx.dt));
         // The ideal omega^(n+1) = omega^n + dt ((omega^n . grad) v^n + nu Laplacian omega^n)
         // (Eq. 18, Alg. 1) less the curl after the projection (Eq. 20), in one pass: the
         // positions have not moved since omega^n was taken, so its Laplacian is the same here.
-        let now: &[Vec3] = v;
-        let loss = per_particle(v.len(), Some(&self.reach), |i| {
-            let (curl, diffusion) = ops.curl_diffusion_at(i, now, omega, nu);
-            omega[i] + dt * (stretch[i] + diffusion) - curl
+        let now = ops.pack(v);
+        let loss = map_fast(v.len(), Some(&self.reach), |i| {
+            let (curl, diffusion) = ops.curl_diffusion_at(i, &now, omega, nu);
+            omega.vec(i) + dt * (stretch[i] + diffusion) - curl
         });
+        let ops = &ctx.ops;
         let samples: Vec<usize> = (0..v.len()).filter(|&i| self.sampled[i]).collect();
         let k = ops.nb.kernel;
         // Smoothed loss at each vortex particle (Eq. 28; walls carry none), times its volume.

@@ -31,9 +31,10 @@
 //! gives back more than was lost at any scale, which is the paper's stability argument.
 
 use super::{Refiner, StepContext};
+use crate::sph::lanes::{for_each_fast, map_fast, CrossSum, F4};
 use crate::sph::neighbors::permute;
 use crate::sph::operators::WallField;
-use crate::sph::Neighborhood;
+use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -45,8 +46,9 @@ pub struct Rankine {
     beta: Real,
     /// omega^(n-1), per fluid particle; empty before the first step.
     previous: Vec<Vec3>,
-    /// The lost vorticity omega^(n-1) - omega^n of the step (kept to reuse its memory).
-    lost: Vec<Vec3>,
+    /// The lost vorticity omega^(n-1) - omega^n of the step, packed (kept to reuse its
+    /// memory).
+    lost: Vec<F4>,
 }
 
 impl Rankine {
@@ -70,39 +72,35 @@ impl Refiner for Rankine {
         if self.beta == 0.0 {
             return;
         }
-        let ops = &ctx.ops;
+        let ops = Packed::new(ctx.ops);
         let rc = core_radius(
             self.beta,
             ctx.nu,
             ctx.dt,
             ctx.spacing,
-            ops.nb.kernel.support(),
+            ops.ops.nb.kernel.support(),
         );
+        let now = ops.pack(v);
         if self.previous.len() != v.len() || rc == 0.0 {
-            self.previous = ops.curl(v, WallField::Velocity);
+            self.previous = map_fast(v.len(), None, |i| ops.curl_at(i, &now, WallField::Velocity));
             return;
         }
         // omega^n and the loss in one pass; `previous` becomes omega^n.
-        let now: &[Vec3] = v;
-        self.lost.resize(now.len(), Vec3::zeros());
-        self.previous
-            .par_iter_mut()
-            .zip(self.lost.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, (previous, lost))| {
-                let omega = ops.curl_at(i, now, WallField::Velocity);
-                *lost = *previous - omega;
-                *previous = omega;
-            });
-        let dv = induced_velocity(&ops.nb, &self.lost, rc);
+        self.lost.resize(v.len(), F4::ZERO);
+        let pairs = self.previous.par_iter_mut().zip(self.lost.par_iter_mut());
+        for_each_fast(pairs, |i, (previous, lost)| {
+            let omega = ops.curl_at(i, &now, WallField::Velocity);
+            *lost = F4::from_vec(&(*previous - omega), 0.0);
+            *previous = omega;
+        });
+        let dv = induced_velocity(&ops, &self.lost, rc);
         // v + dv, and curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
+        for_each_fast(self.previous.par_iter_mut(), |i, omega| {
+            *omega += ops.curl_at(i, &dv, WallField::Zero)
+        });
         v.par_iter_mut()
-            .zip(self.previous.par_iter_mut())
             .enumerate()
-            .for_each(|(i, (v, omega))| {
-                *v += dv[i];
-                *omega += ops.curl_at(i, &dv, WallField::Zero);
-            });
+            .for_each(|(i, v)| *v += dv.vec(i));
     }
 }
 
@@ -118,22 +116,19 @@ pub fn core_radius(beta: Real, nu: Real, dt: Real, spacing: Real, support: Real)
 /// The velocity the Rankine cores of strength `lost` (core radius `rc`) induce at every fluid
 /// particle: dv_j = sum_i f(r) lost_i x e_ij, e_ij = (x_j - x_i) / r, with
 /// f(r) = r_c^2 / (2 r) outside the core and r / 2 inside (Wang et al. Eqs. 9, 15).
-pub fn induced_velocity(nb: &Neighborhood, lost: &[Vec3], rc: Real) -> Vec<Vec3> {
-    let rc2 = rc * rc;
-    (0..lost.len())
-        .into_par_iter()
-        .map(|j| {
-            let mut dv = Vec3::zeros();
-            // x_ji = x_j - x_i points from core i to particle j.
-            nb.fluid_pairs(j, |i, xji| {
-                let r2 = xji.norm_squared();
-                if r2 > 0.0 {
-                    // f(r) / r, since e = x_ji / r.
-                    let f_over_r = if r2 > rc2 { 0.5 * rc2 / r2 } else { 0.5 };
-                    dv += f_over_r * lost[i].cross(&xji);
-                }
-            });
-            dv
-        })
-        .collect()
+pub fn induced_velocity(ops: &Packed, lost: &[F4], rc: Real) -> Field {
+    let rc2 = (rc * rc) as f32;
+    ops.field(None, |j| {
+        let mut dv = CrossSum::default();
+        // x_ji = x_j - x_i points from core i to particle j.
+        ops.pairs(j, |i, xji| {
+            let r2 = xji.dot3(xji);
+            if r2 > 0.0 {
+                // f(r) / r, since e = x_ji / r.
+                let f_over_r = if r2 > rc2 { 0.5 * rc2 / r2 } else { 0.5 };
+                dv.add(lost[i] * F4::splat(f_over_r), xji);
+            }
+        });
+        dv.total()
+    })
 }

@@ -36,8 +36,10 @@
 //! within 0.1 %), the over-restoration at the particle scale.
 
 use super::{Refiner, StepContext};
+use crate::sph::lanes::{for_each_fast, map_fast, F4};
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, Operators, WallField};
+use crate::sph::operators::{curl_of, WallField};
+use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -45,8 +47,9 @@ use std::f64::consts::PI;
 /// VRSPH with gain alpha.
 pub struct Vrsph {
     alpha: Real,
-    /// zeta^n = curl v^n per fluid particle; empty before the first step.
-    zeta: Vec<Vec3>,
+    /// zeta^n = curl v^n per fluid particle, packed (its Laplacian reads it at neighbours);
+    /// empty before the first step.
+    zeta: Field,
     /// The stretching (zeta^n . grad) v^n per fluid particle.
     stretch: Vec<Vec3>,
 }
@@ -55,7 +58,7 @@ impl Vrsph {
     pub fn new(alpha: Real) -> Self {
         Self {
             alpha,
-            zeta: Vec::new(),
+            zeta: Field::default(),
             stretch: Vec::new(),
         }
     }
@@ -64,7 +67,7 @@ impl Vrsph {
 impl Refiner for Vrsph {
     fn permute(&mut self, perm: &[u32]) {
         if self.zeta.len() == perm.len() {
-            permute(&mut self.zeta, perm);
+            self.zeta.permute(perm);
             permute(&mut self.stretch, perm);
         }
     }
@@ -73,31 +76,26 @@ impl Refiner for Vrsph {
         if self.alpha == 0.0 {
             return;
         }
-        let ops = &ctx.ops;
+        let ops = Packed::new(ctx.ops);
         if self.zeta.len() == v.len() {
             let (zeta, stretch, (nu, dt)) = (&self.zeta, &self.stretch, (ctx.nu, ctx.dt));
-            let loss: Vec<Vec3> = (0..v.len())
-                .into_par_iter()
-                .map(|i| {
-                    let (now, diffusion) = ops.curl_diffusion_at(i, v, zeta, nu);
-                    zeta[i] + dt * (stretch[i] + diffusion) - now
-                })
-                .collect();
-            let psi = stream_function(ops, &loss);
+            let packed = ops.pack(v);
+            let loss = map_fast(v.len(), None, |i| {
+                let (now, diffusion) = ops.curl_diffusion_at(i, &packed, zeta, nu);
+                zeta.vec(i) + dt * (stretch[i] + diffusion) - now
+            });
+            let psi = stream_function(&ops, &loss);
             let alpha = self.alpha;
-            v.par_iter_mut().enumerate().for_each(|(i, v)| {
-                *v += alpha * ops.curl_at(i, &psi, WallField::Zero);
+            for_each_fast(v.par_iter_mut(), |i, v| {
+                *v += alpha * ops.curl_at(i, &psi, WallField::Zero)
             });
         }
-        let v: &[Vec3] = v;
-        (self.zeta, self.stretch) = (0..v.len())
-            .into_par_iter()
-            .map(|i| {
-                let grad = ops.gradient_at(i, v, WallField::Velocity);
-                let zeta = curl_of(&grad);
-                (zeta, grad * zeta)
-            })
-            .unzip();
+        let packed = ops.pack(v);
+        let grad = map_fast(v.len(), None, |i| {
+            ops.gradient_at(i, &packed, WallField::Velocity)
+        });
+        self.zeta = ops.field(None, |i| curl_of(&grad[i]));
+        self.stretch = grad.par_iter().map(|g| g * curl_of(g)).collect();
     }
 }
 
@@ -109,22 +107,20 @@ pub fn stream_core(volume: Real) -> Real {
 
 /// The local stream function (Liu Eq. 15) of the vorticity `zeta`:
 /// psi_i = 1 / (4 pi) sum_{j in N(i) + i} zeta_j V_j / sqrt(|x_ij|^2 + e^2).
-///
-/// The weight 1 / sqrt(...) is taken in f32: an f64 square root and division cost more than the
-/// rest of the pass, and f32's rounding (6e-8) matches that of the cached kernel gradients
-/// the other passes read.
-pub fn stream_function(ops: &Operators, zeta: &[Vec3]) -> Vec<Vec3> {
-    let e = stream_core(ops.nb.volume);
+pub fn stream_function(ops: &Packed, zeta: &[Vec3]) -> Field {
+    let e = stream_core(ops.ops.nb.volume);
     let e2 = (e * e) as f32;
-    (0..zeta.len())
-        .into_par_iter()
-        .map(|i| {
-            let mut psi = ops.volume[i] * zeta[i] / e;
-            ops.nb.fluid_pairs(i, |j, xij| {
-                let w = 1.0 / (xij.norm_squared() as f32 + e2).sqrt();
-                psi += (ops.volume[j] * Real::from(w)) * zeta[j]
-            });
-            psi / (4.0 * PI)
-        })
-        .collect()
+    let scaled: Vec<F4> = zeta
+        .par_iter()
+        .zip(ops.ops.volume.par_iter())
+        .map(|(z, &v)| F4::from_vec(&(v / (4.0 * PI) * z), 0.0))
+        .collect();
+    let self_weight = F4::splat((1.0 / e) as f32);
+    ops.field(None, |i| {
+        let mut psi = scaled[i] * self_weight;
+        ops.pairs(i, |j, xij| {
+            psi += scaled[j] * F4::splat(1.0 / (xij.dot3(xij) + e2).sqrt())
+        });
+        psi.vec()
+    })
 }

@@ -13,6 +13,10 @@
 //!
 //! The curl is the antisymmetric part of the same gradient tensor, so one pass gives both.
 //!
+//! These f64 forms serve the metrics, the micropolar and confinement baselines and the tests;
+//! the Rankine, VRSPH and MCVSPH passes use their single-precision packed twins in
+//! `super::packed` (which also holds the Laplacian), checked against these.
+//!
 //! **Walls.** With `walls` on, the Akinci boundary samples take part in every sum as neighbours
 //! with their own volume, their kinematic velocity in velocity operators, and zero in the
 //! others (walls carry no vorticity, stream function or loss: Wang et al. Sec. 4.3, Ye et al.
@@ -110,52 +114,6 @@ impl<'a> Operators<'a> {
             c += vj * (ai - aj).cross(&grad)
         });
         c
-    }
-
-    /// The curl of `v` (walls at their velocity) and `nu` times the Laplacian of the
-    /// vorticity-like field `a` at particle i: [`Self::curl_laplacian_at`] where `nu` > 0, the
-    /// curl alone (and zero) otherwise. The vorticity equation's viscous term of VRSPH and
-    /// MCVSPH.
-    #[inline]
-    pub fn curl_diffusion_at(&self, i: usize, v: &[Vec3], a: &[Vec3], nu: Real) -> (Vec3, Vec3) {
-        if nu > 0.0 {
-            let (curl, laplacian) = self.curl_laplacian_at(i, v, a);
-            (curl, nu * laplacian)
-        } else {
-            (self.curl_at(i, v, WallField::Velocity), Vec3::zeros())
-        }
-    }
-
-    /// The curl of `v` (walls at their velocity) and the Laplacian (Ye Eq. 8, d = 3) of the
-    /// vorticity-like field `a` (walls hold zero) at particle i, in one pass over its
-    /// neighbours: VRSPH and MCVSPH read both at the same point of the step.
-    #[inline]
-    pub fn curl_laplacian_at(&self, i: usize, v: &[Vec3], a: &[Vec3]) -> (Vec3, Vec3) {
-        let eps = 0.01 * self.nb.kernel.support() * self.nb.kernel.support();
-        let (vi, ai) = (v[i], a[i]);
-        let (mut c, mut l) = (Vec3::zeros(), Vec3::zeros());
-        self.nb.fluid_pairs_grad(i, |j, xij, grad| {
-            let vj = self.volume[j];
-            c += vj * (vi - v[j]).cross(&grad);
-            l += (vj * (ai - a[j]).dot(&xij) / (xij.norm_squared() + eps)) * grad;
-        });
-        if self.walls {
-            let b = self.nb.boundary;
-            self.nb.boundary_pairs_grad(i, |k, xik, grad| {
-                c += b.volume[k] * (vi - b.v[k]).cross(&grad);
-                l += (b.volume[k] * ai.dot(&xik) / (xik.norm_squared() + eps)) * grad;
-            });
-        }
-        (c, 10.0 * l)
-    }
-
-    /// Marks the particles marked in `set` and their fluid neighbours (the set grown by one
-    /// neighbourhood): what a sum over neighbours of the set reads.
-    pub fn grow(&self, set: &[bool]) -> Vec<bool> {
-        (0..set.len())
-            .into_par_iter()
-            .map(|i| set[i] || self.nb.fluid.of(i).iter().any(|&j| set[j as usize]))
-            .collect()
     }
 
     /// Gradient (Ye Eq. 7) of a scalar field `s` (walls hold zero).

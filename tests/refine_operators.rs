@@ -6,9 +6,9 @@ use eddy::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use eddy::refine::{mcvsph, rankine, vrsph};
 use eddy::run::bodies;
 use eddy::scene::{self, Scene};
-use eddy::sph::lanes::{map_fast, F4};
+use eddy::sph::lanes::F4;
 use eddy::sph::neighbors::cell_order;
-use eddy::sph::operators::{curl_of, volumes, Operators, WallField};
+use eddy::sph::operators::{curl_of, per_particle, volumes, Operators, WallField};
 use eddy::sph::packed::Packed;
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
@@ -204,10 +204,10 @@ fn packed_operators_equal_the_f64_ones() {
         let grad = ops.gradient(&s.fluid.v, WallField::Velocity);
         let scale = curl.iter().map(|c| c.norm()).fold(0.0, f64::max);
         assert!(scale > 1.0, "the fluid moves: max |curl v| = {scale}");
-        let packed_curl = map_fast(v.len(), None, |i| {
+        let packed_curl = per_particle(v.len(), None, |i| {
             packed.curl_at(i, &v, WallField::Velocity)
         });
-        let packed_grad = map_fast(v.len(), None, |i| {
+        let packed_grad = per_particle(v.len(), None, |i| {
             packed.gradient_at(i, &v, WallField::Velocity)
         });
         let mut worst: f64 = 0.0;
@@ -277,7 +277,7 @@ fn a_single_vortex_turns_in_the_sense_of_its_vorticity() {
     let induced = rankine::induced_velocity(&packed, &lost, 0.5 * SPACING);
     let rankine: Vec<Vec3> = (0..single.len()).map(|i| induced.vec(i)).collect();
     let psi = vrsph::stream_function(&packed, &single);
-    let vr = map_fast(psi.len(), None, |i| {
+    let vr = per_particle(psi.len(), None, |i| {
         packed.curl_at(i, &psi, WallField::Zero)
     });
     let mut checked = 0;

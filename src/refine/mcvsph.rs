@@ -34,9 +34,8 @@
 //! cheaper); its error is a small fraction of the Monte Carlo error.
 
 use super::{add_scaled, Refiner, StepContext};
-use crate::sph::lanes::map_fast;
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, Operators, WallField};
+use crate::sph::operators::{curl_of, per_particle, Operators, WallField};
 use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rand::SeedableRng;
@@ -120,20 +119,19 @@ impl Refiner for Mcvsph {
         // neighbourhood further the curl is enough.
         self.reach = self.near_samples(&ctx.ops);
         let (reach, packed) = (&self.reach, ops.pack(v));
-        let near = map_fast(v.len(), None, |i| {
-            reach[i] || ops.ops.nb.fluid.of(i).iter().any(|&j| reach[j as usize])
-        });
-        let grad = map_fast(v.len(), Some(reach), |i| {
-            ops.gradient_at(i, &packed, WallField::Velocity)
-        });
-        self.omega = ops.field(Some(&near), |i| {
+        let near: Vec<bool> = (0..v.len())
+            .into_par_iter()
+            .map(|i| reach[i] || ops.ops.nb.fluid.of(i).iter().any(|&j| reach[j as usize]))
+            .collect();
+        (self.omega, self.stretch) = ops.field_with(Some(&near), |i| {
             if reach[i] {
-                curl_of(&grad[i])
+                let g = ops.gradient_at(i, &packed, WallField::Velocity);
+                let omega = curl_of(&g);
+                (omega, g * omega)
             } else {
-                ops.curl_at(i, &packed, WallField::Velocity)
+                (ops.curl_at(i, &packed, WallField::Velocity), Vec3::zeros())
             }
         });
-        self.stretch = grad.par_iter().map(|g| g * curl_of(g)).collect();
     }
 
     fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
@@ -146,7 +144,7 @@ impl Refiner for Mcvsph {
         // (Eq. 18, Alg. 1) less the curl after the projection (Eq. 20), in one pass: the
         // positions have not moved since omega^n was taken, so its Laplacian is the same here.
         let now = ops.pack(v);
-        let loss = map_fast(v.len(), Some(&self.reach), |i| {
+        let loss = per_particle(v.len(), Some(&self.reach), |i| {
             let (curl, diffusion) = ops.curl_diffusion_at(i, &now, omega, nu);
             omega.vec(i) + dt * (stretch[i] + diffusion) - curl
         });

@@ -31,9 +31,9 @@
 //! gives back more than was lost at any scale, which is the paper's stability argument.
 
 use super::{Refiner, StepContext};
-use crate::sph::lanes::{for_each_fast, map_fast, CrossSum, F4};
+use crate::sph::lanes::{CrossSum, F4};
 use crate::sph::neighbors::permute;
-use crate::sph::operators::WallField;
+use crate::sph::operators::{per_particle, WallField};
 use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -82,22 +82,24 @@ impl Refiner for Rankine {
         );
         let now = ops.pack(v);
         if self.previous.len() != v.len() || rc == 0.0 {
-            self.previous = map_fast(v.len(), None, |i| ops.curl_at(i, &now, WallField::Velocity));
+            self.previous =
+                per_particle(v.len(), None, |i| ops.curl_at(i, &now, WallField::Velocity));
             return;
         }
         // omega^n and the loss in one pass; `previous` becomes omega^n.
         self.lost.resize(v.len(), F4::ZERO);
         let pairs = self.previous.par_iter_mut().zip(self.lost.par_iter_mut());
-        for_each_fast(pairs, |i, (previous, lost)| {
+        pairs.enumerate().for_each(|(i, (previous, lost))| {
             let omega = ops.curl_at(i, &now, WallField::Velocity);
             *lost = F4::from_vec(&(*previous - omega), 0.0);
             *previous = omega;
         });
         let dv = induced_velocity(&ops, &self.lost, rc);
         // v + dv, and curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
-        for_each_fast(self.previous.par_iter_mut(), |i, omega| {
-            *omega += ops.curl_at(i, &dv, WallField::Zero)
-        });
+        self.previous
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, omega)| *omega += ops.curl_at(i, &dv, WallField::Zero));
         v.par_iter_mut()
             .enumerate()
             .for_each(|(i, v)| *v += dv.vec(i));

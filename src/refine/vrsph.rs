@@ -36,9 +36,9 @@
 //! within 0.1 %), the over-restoration at the particle scale.
 
 use super::{Refiner, StepContext};
-use crate::sph::lanes::{for_each_fast, map_fast, F4};
+use crate::sph::lanes::F4;
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, WallField};
+use crate::sph::operators::{curl_of, per_particle, WallField};
 use crate::sph::packed::{Field, Packed};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -80,22 +80,22 @@ impl Refiner for Vrsph {
         if self.zeta.len() == v.len() {
             let (zeta, stretch, (nu, dt)) = (&self.zeta, &self.stretch, (ctx.nu, ctx.dt));
             let packed = ops.pack(v);
-            let loss = map_fast(v.len(), None, |i| {
+            let loss = per_particle(v.len(), None, |i| {
                 let (now, diffusion) = ops.curl_diffusion_at(i, &packed, zeta, nu);
                 zeta.vec(i) + dt * (stretch[i] + diffusion) - now
             });
             let psi = stream_function(&ops, &loss);
             let alpha = self.alpha;
-            for_each_fast(v.par_iter_mut(), |i, v| {
-                *v += alpha * ops.curl_at(i, &psi, WallField::Zero)
-            });
+            v.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, v)| *v += alpha * ops.curl_at(i, &psi, WallField::Zero));
         }
         let packed = ops.pack(v);
-        let grad = map_fast(v.len(), None, |i| {
-            ops.gradient_at(i, &packed, WallField::Velocity)
+        (self.zeta, self.stretch) = ops.field_with(None, |i| {
+            let grad = ops.gradient_at(i, &packed, WallField::Velocity);
+            let zeta = curl_of(&grad);
+            (zeta, grad * zeta)
         });
-        self.zeta = ops.field(None, |i| curl_of(&grad[i]));
-        self.stretch = grad.par_iter().map(|g| g * curl_of(g)).collect();
     }
 }
 

@@ -1,14 +1,11 @@
 //! Four f32 lanes: the unit of the refinements' packed neighbour passes (see `super::packed`).
 //!
 //! A particle's 3-vector and one scalar fill one 16-byte load, and a pair's cross or outer
-//! product becomes a few four-lane operations, which LLVM turns into SSE or AVX instructions
-//! from this plain code. [`for_each_fast`] compiles a block of particles for AVX2 where the CPU
-//! has it (three-operand VEX forms); elsewhere the same code runs on the baseline instructions.
-//! Zen 4 hardware gathers (eight lanes across neighbours instead) were measured four times
-//! slower than this, so the lanes run across components, not across neighbours.
+//! product becomes a few four-lane operations. The lanes run across a vector's components, not
+//! across neighbours: eight neighbours at once need hardware gathers, which measured four
+//! times slower than this on Zen 4.
 
 use crate::{Real, Vec3};
-use rayon::prelude::*;
 use std::ops::{Add, AddAssign, Mul, Sub};
 
 /// Four f32 lanes (x, y, z, w). On x86_64 a vector register through SSE (part of the baseline
@@ -238,56 +235,4 @@ impl CrossSum {
     pub fn total(self) -> Vec3 {
         (self.0 - self.1).yzx().vec()
     }
-}
-
-/// Particles per parallel block.
-const BLOCK: usize = 512;
-
-/// `f(i, item)` for the items of `items` in parallel (i counts them from zero), each block of
-/// items compiled for AVX2 where the CPU has it.
-pub fn for_each_fast<T: Send>(
-    items: impl IndexedParallelIterator<Item = T>,
-    f: impl Fn(usize, T) + Sync,
-) {
-    items.enumerate().chunks(BLOCK).for_each(|block| {
-        fast(|| {
-            for (i, item) in block {
-                f(i, item)
-            }
-        })
-    });
-}
-
-/// `f(i)` for every i below `n` in parallel (or only where `only[i]` holds, the default
-/// elsewhere), each block compiled for AVX2 where the CPU has it.
-pub fn map_fast<T: Default + Clone + Send>(
-    n: usize,
-    only: Option<&[bool]>,
-    f: impl Fn(usize) -> T + Sync,
-) -> Vec<T> {
-    let mut out = vec![T::default(); n];
-    for_each_fast(out.par_iter_mut(), |i, o| {
-        if only.is_none_or(|only| only[i]) {
-            *o = f(i)
-        }
-    });
-    out
-}
-
-/// Runs `work`, inlined into a function compiled for AVX2 when the CPU has it.
-#[inline(always)]
-fn fast(work: impl FnOnce()) {
-    #[cfg(target_arch = "x86_64")]
-    if std::env::var_os("EDDY_AVX").is_some() && std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { with_avx2(work) };
-    }
-    work()
-}
-
-/// `work()` compiled with AVX2 enabled (LLVM inlines `work`, whose features are a subset).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn with_avx2(work: impl FnOnce()) {
-    work()
 }

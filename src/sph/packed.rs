@@ -15,7 +15,7 @@
 //!
 //! **Walls.** Boundary samples enter as in [`Operators`], summed in f64 (they are few).
 
-use super::lanes::{map_fast, CrossSum, F4};
+use super::lanes::{CrossSum, F4};
 use super::operators::{Mat3, Operators, WallField};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -87,15 +87,29 @@ impl<'a> Packed<'a> {
     /// The field `f(i)` at every particle (zero where `only` is given and false), packed with
     /// this step's volumes.
     pub fn field(&self, only: Option<&[bool]>, f: impl Fn(usize) -> Vec3 + Sync) -> Field {
+        self.field_with(only, |i| (f(i), ())).0
+    }
+
+    /// [`Self::field`] for `f(i) = (a_i, t_i)`, and the t_i in a plain vector (the default
+    /// where `only` is false).
+    pub fn field_with<T: Default + Send>(
+        &self,
+        only: Option<&[bool]>,
+        f: impl Fn(usize) -> (Vec3, T) + Sync,
+    ) -> (Field, Vec<T>) {
         let volume = self.ops.volume;
-        Field(map_fast(volume.len(), None, |i| {
-            let a = if only.is_none_or(|only| only[i]) {
-                f(i)
-            } else {
-                Vec3::zeros()
-            };
-            F4::from_vec(&a, volume[i])
-        }))
+        let (packed, rest) = (0..volume.len())
+            .into_par_iter()
+            .map(|i| {
+                let (a, t) = if only.is_none_or(|only| only[i]) {
+                    f(i)
+                } else {
+                    (Vec3::zeros(), T::default())
+                };
+                (F4::from_vec(&a, volume[i]), t)
+            })
+            .unzip();
+        (Field(packed), rest)
     }
 
     /// Calls `f(j, x_i - x_j)` for every fluid neighbour j of i.

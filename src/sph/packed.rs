@@ -2,10 +2,14 @@
 //! neighbour passes of the Rankine, VRSPH and MCVSPH refinements.
 //!
 //! **Why.** These refinements are a few passes over every pair, and their cost is measured
-//! against the DFSPH step (issue 6). In f64 on `Vec3`s a pair costs about 2.5 ns (curl, 85k
-//! particles, one core): ten scalar loads and the cross product's scalar arithmetic. Packed as
-//! four f32 lanes ([`F4`]: a field's vector with zero, positions with the volume V_j), a
-//! neighbour is one 16-byte load and the arithmetic runs on four lanes: 1.45 ns a pair.
+//! against the DFSPH step (issue 6). In f64 on `Vec3`s a curl costs about 2.6 ns a pair (80k
+//! particles, one core): ten scalar loads and the cross product's scalar arithmetic. In a
+//! [`Field`] each particle's vector and volume V_j fill four f32 lanes ([`F4`]), so a
+//! neighbour is one 16-byte load and the arithmetic runs on four lanes: 1.9 ns for the curl,
+//! 2.1 for the gradient (f64: 3.1), 4.5 for the fused curl and Laplacian (6.3), 3.0 for the
+//! VRSPH stream function (4.2). Four neighbours side by side (transposed into one row per
+//! component, so that the dot products and divisions are four-lane operations) measured
+//! slower still: the rows and their constants need more than SSE's 16 registers.
 //!
 //! **Precision.** The fields, positions (relative to the first particle) and sums are f32,
 //! like the cached kernel gradients the sums already read (relative rounding 6e-8): a result

@@ -51,8 +51,8 @@ pub struct Mcvsph {
     theta: Real,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
-    /// omega^n = curl v^n of the current step, on `reach` and one neighbourhood further,
-    /// packed (its Laplacian reads it at neighbours).
+    /// omega^n = curl v^n of the current step, packed (its Laplacian reads it at the
+    /// neighbours of `reach`).
     omega: Field,
     /// The stretching (omega^n . grad) v^n, on `reach`.
     stretch: Vec<Vec3>,

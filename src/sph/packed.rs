@@ -80,12 +80,7 @@ impl<'a> Packed<'a> {
 
     /// The field `a`, packed with this step's volumes.
     pub fn pack(&self, a: &[Vec3]) -> Field {
-        Field(
-            a.par_iter()
-                .zip(self.ops.volume.par_iter())
-                .map(|(a, &v)| F4::from_vec(a, v))
-                .collect(),
-        )
+        self.field(None, |i| a[i])
     }
 
     /// The field `f(i)` at every particle (zero where `only` is given and false), packed with

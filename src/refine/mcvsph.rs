@@ -34,9 +34,10 @@
 //! cheaper); its error is a small fraction of the Monte Carlo error.
 
 use super::{add_scaled, Refiner, StepContext};
+use crate::sph::lanes::F4;
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, per_particle, Operators, WallField};
-use crate::sph::packed::{Field, Packed};
+use crate::sph::operators::{curl_of, Operators, WallField};
+use crate::sph::packed::{fill, Field, Packed};
 use crate::{Real, Vec3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -59,6 +60,10 @@ pub struct Mcvsph {
     /// The vortex particles and their fluid neighbours this step: the only particles whose
     /// loss the smoothing of Eq. 28 reads.
     reach: Vec<bool>,
+    /// Buffers of one step (kept for their memory): packed positions and velocity, the loss.
+    positions: Vec<F4>,
+    velocity: Field,
+    loss: Vec<Vec3>,
 }
 
 impl Mcvsph {
@@ -77,22 +82,24 @@ impl Mcvsph {
             omega: Field::default(),
             stretch: Vec::new(),
             reach: Vec::new(),
+            positions: Vec::new(),
+            velocity: Field::default(),
+            loss: Vec::new(),
         }
     }
 }
 
 impl Mcvsph {
-    /// The vortex particles and their fluid neighbours, marked from the vortex particles'
-    /// own neighbour lists (fluid neighbourhoods are symmetric): a pass over 1 % of the lists
-    /// instead of all of them.
-    fn near_samples(&self, ops: &Operators) -> Vec<bool> {
-        let mut reach = self.sampled.clone();
-        for s in (0..reach.len()).filter(|&i| self.sampled[i]) {
+    /// Marks in `reach` the vortex particles and their fluid neighbours, from the vortex
+    /// particles' own neighbour lists (fluid neighbourhoods are symmetric): a pass over 1 % of
+    /// the lists instead of all of them.
+    fn mark_reach(&mut self, ops: &Operators) {
+        self.reach.clone_from(&self.sampled);
+        for s in (0..self.reach.len()).filter(|&i| self.sampled[i]) {
             for &j in ops.nb.fluid.of(s) {
-                reach[j as usize] = true;
+                self.reach[j as usize] = true;
             }
         }
-        reach
     }
 }
 
@@ -111,21 +118,22 @@ impl Refiner for Mcvsph {
         if self.volume_coefficient == 0.0 {
             return;
         }
-        let ops = Packed::new(ctx.ops);
         // Only the loss next to a vortex particle is used (Eq. 28), so the ideal vorticity is
         // needed on `reach`, and the vorticity one neighbourhood further (its Laplacian). The
         // stretching term needs the whole gradient only on `reach`; elsewhere the curl is
         // enough. At 1 % vortex particles that ring holds three quarters of the fluid, and
         // taking the curl everywhere costs less than finding the ring (measured at 389k).
-        self.reach = self.near_samples(&ctx.ops);
-        let (reach, packed) = (&self.reach, ops.pack(v));
-        (self.omega, self.stretch) = ops.field_with(None, |i| {
+        self.mark_reach(&ctx.ops);
+        let ops = Packed::new(ctx.ops, &mut self.positions);
+        let (reach, velocity) = (&self.reach, &mut self.velocity);
+        ops.pack(v, velocity);
+        ops.field_with(&mut self.omega, &mut self.stretch, None, |i| {
             if reach[i] {
-                let g = ops.gradient_at(i, &packed, WallField::Velocity);
+                let g = ops.gradient_at(i, velocity, WallField::Velocity);
                 let omega = curl_of(&g);
                 (omega, g * omega)
             } else {
-                (ops.curl_at(i, &packed, WallField::Velocity), Vec3::zeros())
+                (ops.curl_at(i, velocity, WallField::Velocity), Vec3::zeros())
             }
         });
     }
@@ -134,16 +142,22 @@ impl Refiner for Mcvsph {
         if self.volume_coefficient == 0.0 || self.omega.len() != v.len() {
             return;
         }
-        let ops = Packed::new(ctx.ops);
+        let ops = Packed::new(ctx.ops, &mut self.positions);
         let (omega, stretch, (nu, dt)) = (&self.omega, &self.stretch, (ctx.nu, ctx.dt));
         // The ideal omega^(n+1) = omega^n + dt ((omega^n . grad) v^n + nu Laplacian omega^n)
         // (Eq. 18, Alg. 1) less the curl after the projection (Eq. 20), in one pass: the
         // positions have not moved since omega^n was taken, so its Laplacian is the same here.
-        let now = ops.pack(v);
-        let loss = per_particle(v.len(), Some(&self.reach), |i| {
-            let (curl, diffusion) = ops.curl_diffusion_at(i, &now, omega, nu);
-            omega.vec(i) + dt * (stretch[i] + diffusion) - curl
+        let (reach, now) = (&self.reach, &mut self.velocity);
+        ops.pack(v, now);
+        fill(&mut self.loss, v.len(), |i| {
+            if reach[i] {
+                let (curl, diffusion) = ops.curl_diffusion_at(i, now, omega, nu);
+                omega.vec(i) + dt * (stretch[i] + diffusion) - curl
+            } else {
+                Vec3::zeros()
+            }
         });
+        let loss = &self.loss;
         let ops = &ctx.ops;
         let samples: Vec<usize> = (0..v.len()).filter(|&i| self.sampled[i]).collect();
         let k = ops.nb.kernel;

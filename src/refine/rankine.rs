@@ -46,9 +46,12 @@ pub struct Rankine {
     beta: Real,
     /// omega^(n-1), per fluid particle; empty before the first step.
     previous: Vec<Vec3>,
-    /// The lost vorticity omega^(n-1) - omega^n of the step, packed (kept to reuse its
-    /// memory).
+    /// Buffers of one step (kept for their memory): the lost vorticity omega^(n-1) -
+    /// omega^n, the packed positions, velocity and induced velocity.
     lost: Vec<F4>,
+    positions: Vec<F4>,
+    now: Field,
+    dv: Field,
 }
 
 impl Rankine {
@@ -57,6 +60,9 @@ impl Rankine {
             beta,
             previous: Vec::new(),
             lost: Vec::new(),
+            positions: Vec::new(),
+            now: Field::default(),
+            dv: Field::default(),
         }
     }
 }
@@ -69,37 +75,44 @@ impl Refiner for Rankine {
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {
-        if self.beta == 0.0 {
+        let Self {
+            beta,
+            previous,
+            lost,
+            positions,
+            now,
+            dv,
+        } = self;
+        if *beta == 0.0 {
             return;
         }
-        let ops = Packed::new(ctx.ops);
+        let ops = Packed::new(ctx.ops, positions);
         let rc = core_radius(
-            self.beta,
+            *beta,
             ctx.nu,
             ctx.dt,
             ctx.spacing,
             ops.ops.nb.kernel.support(),
         );
-        let now = ops.pack(v);
-        if self.previous.len() != v.len() || rc == 0.0 {
-            self.previous =
-                per_particle(v.len(), None, |i| ops.curl_at(i, &now, WallField::Velocity));
+        ops.pack(v, now);
+        if previous.len() != v.len() || rc == 0.0 {
+            *previous = per_particle(v.len(), None, |i| ops.curl_at(i, now, WallField::Velocity));
             return;
         }
         // omega^n and the loss in one pass; `previous` becomes omega^n.
-        self.lost.resize(v.len(), F4::ZERO);
-        let pairs = self.previous.par_iter_mut().zip(self.lost.par_iter_mut());
+        lost.resize(v.len(), F4::ZERO);
+        let pairs = previous.par_iter_mut().zip(lost.par_iter_mut());
         pairs.enumerate().for_each(|(i, (previous, lost))| {
-            let omega = ops.curl_at(i, &now, WallField::Velocity);
+            let omega = ops.curl_at(i, now, WallField::Velocity);
             *lost = F4::from_vec(&(*previous - omega), 0.0);
             *previous = omega;
         });
-        let dv = induced_velocity(&ops, &self.lost, rc);
+        induced_velocity(&ops, lost, rc, dv);
         // v + dv, and curl(v + dv) = curl v + curl dv (walls do not move with the refinement).
-        self.previous
+        previous
             .par_iter_mut()
             .enumerate()
-            .for_each(|(i, omega)| *omega += ops.curl_at(i, &dv, WallField::Zero));
+            .for_each(|(i, omega)| *omega += ops.curl_at(i, dv, WallField::Zero));
         v.par_iter_mut()
             .enumerate()
             .for_each(|(i, v)| *v += dv.vec(i));
@@ -116,11 +129,11 @@ pub fn core_radius(beta: Real, nu: Real, dt: Real, spacing: Real, support: Real)
 }
 
 /// The velocity the Rankine cores of strength `lost` (core radius `rc`) induce at every fluid
-/// particle: dv_j = sum_i f(r) lost_i x e_ij, e_ij = (x_j - x_i) / r, with
+/// particle, into `dv`: dv_j = sum_i f(r) lost_i x e_ij, e_ij = (x_j - x_i) / r, with
 /// f(r) = r_c^2 / (2 r) outside the core and r / 2 inside (Wang et al. Eqs. 9, 15).
-pub fn induced_velocity(ops: &Packed, lost: &[F4], rc: Real) -> Field {
+pub fn induced_velocity(ops: &Packed, lost: &[F4], rc: Real, dv: &mut Field) {
     let rc2 = (rc * rc) as f32;
-    ops.field(None, |j| {
+    ops.field(dv, None, |j| {
         let mut dv = CrossSum::default();
         // x_ji = x_j - x_i points from core i to particle j.
         ops.pairs(j, |i, xji| {

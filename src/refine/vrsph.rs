@@ -38,8 +38,8 @@
 use super::{Refiner, StepContext};
 use crate::sph::lanes::F4;
 use crate::sph::neighbors::permute;
-use crate::sph::operators::{curl_of, per_particle, WallField};
-use crate::sph::packed::{Field, Packed};
+use crate::sph::operators::{curl_of, WallField};
+use crate::sph::packed::{fill, Field, Packed};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -52,6 +52,12 @@ pub struct Vrsph {
     zeta: Field,
     /// The stretching (zeta^n . grad) v^n per fluid particle.
     stretch: Vec<Vec3>,
+    /// Buffers of one step (kept for their memory): packed positions and velocity, the
+    /// loss's stream strengths and the stream function.
+    positions: Vec<F4>,
+    velocity: Field,
+    strength: Vec<F4>,
+    psi: Field,
 }
 
 impl Vrsph {
@@ -60,6 +66,10 @@ impl Vrsph {
             alpha,
             zeta: Field::default(),
             stretch: Vec::new(),
+            positions: Vec::new(),
+            velocity: Field::default(),
+            strength: Vec::new(),
+            psi: Field::default(),
         }
     }
 }
@@ -73,26 +83,35 @@ impl Refiner for Vrsph {
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {
-        if self.alpha == 0.0 {
+        let Self {
+            alpha,
+            zeta,
+            stretch,
+            positions,
+            velocity,
+            strength,
+            psi,
+        } = self;
+        if *alpha == 0.0 {
             return;
         }
-        let ops = Packed::new(ctx.ops);
-        if self.zeta.len() == v.len() {
-            let (zeta, stretch, (nu, dt)) = (&self.zeta, &self.stretch, (ctx.nu, ctx.dt));
-            let packed = ops.pack(v);
-            let loss = per_particle(v.len(), None, |i| {
-                let (now, diffusion) = ops.curl_diffusion_at(i, &packed, zeta, nu);
-                zeta.vec(i) + dt * (stretch[i] + diffusion) - now
+        let ops = Packed::new(ctx.ops, positions);
+        if zeta.len() == v.len() {
+            let (nu, dt) = (ctx.nu, ctx.dt);
+            ops.pack(v, velocity);
+            fill(strength, v.len(), |i| {
+                let (now, diffusion) = ops.curl_diffusion_at(i, velocity, zeta, nu);
+                let loss = zeta.vec(i) + dt * (stretch[i] + diffusion) - now;
+                stream_strength(ops.ops.volume[i], &loss)
             });
-            let psi = stream_function(&ops, &loss);
-            let alpha = self.alpha;
+            stream_function(&ops, strength, psi);
             v.par_iter_mut()
                 .enumerate()
-                .for_each(|(i, v)| *v += alpha * ops.curl_at(i, &psi, WallField::Zero));
+                .for_each(|(i, v)| *v += *alpha * ops.curl_at(i, psi, WallField::Zero));
         }
-        let packed = ops.pack(v);
-        (self.zeta, self.stretch) = ops.field_with(None, |i| {
-            let grad = ops.gradient_at(i, &packed, WallField::Velocity);
+        ops.pack(v, velocity);
+        ops.field_with(zeta, stretch, None, |i| {
+            let grad = ops.gradient_at(i, velocity, WallField::Velocity);
             let zeta = curl_of(&grad);
             (zeta, grad * zeta)
         });
@@ -105,21 +124,22 @@ pub fn stream_core(volume: Real) -> Real {
     2.0 / 3.0 * (3.0 * volume / (4.0 * PI)).cbrt()
 }
 
-/// The local stream function (Liu Eq. 15) of the vorticity `zeta`:
-/// psi_i = 1 / (4 pi) sum_{j in N(i) + i} zeta_j V_j / sqrt(|x_ij|^2 + e^2).
-pub fn stream_function(ops: &Packed, zeta: &[Vec3]) -> Field {
+/// The strength s = V zeta / (4 pi) of a particle of volume V and vorticity zeta in Eq. 15,
+/// packed for [`stream_function`].
+pub fn stream_strength(volume: Real, zeta: &Vec3) -> F4 {
+    F4::from_vec(&(volume / (4.0 * PI) * zeta), 0.0)
+}
+
+/// The local stream function (Liu Eq. 15) of the strengths s_j = V_j zeta_j / (4 pi)
+/// ([`stream_strength`]), into `psi`: psi_i = sum_{j in N(i) + i} s_j / sqrt(|x_ij|^2 + e^2).
+pub fn stream_function(ops: &Packed, strength: &[F4], psi: &mut Field) {
     let e = stream_core(ops.ops.nb.volume);
     let e2 = (e * e) as f32;
-    let scaled: Vec<F4> = zeta
-        .par_iter()
-        .zip(ops.ops.volume.par_iter())
-        .map(|(z, &v)| F4::from_vec(&(v / (4.0 * PI) * z), 0.0))
-        .collect();
     let self_weight = F4::splat((1.0 / e) as f32);
-    ops.field(None, |i| {
-        let mut psi = scaled[i] * self_weight;
+    ops.field(psi, None, |i| {
+        let mut psi = strength[i] * self_weight;
         ops.pairs(i, |j, xij| {
-            psi += scaled[j] * F4::splat(1.0 / (xij.dot3(xij) + e2).sqrt())
+            psi += strength[j] * F4::splat(xij.dot3(xij) + e2).rsqrt()
         });
         psi.vec()
     })

@@ -9,5 +9,6 @@ fn main() -> Result<(), eddy::run::RunError> {
         steps: 10,
         refinements: Vec::new(),
         mcvsph_error: false,
+        passes: false,
     })
 }

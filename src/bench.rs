@@ -35,6 +35,10 @@ pub struct BenchArgs {
     /// particles at the smallest size.
     #[arg(long)]
     pub mcvsph_error: bool,
+    /// Also time VRSPH's four neighbour passes at each size against the floor of passes that
+    /// load the same data and do no arithmetic.
+    #[arg(long)]
+    pub passes: bool,
 }
 
 /// One measured configuration.

@@ -4,12 +4,22 @@
 //! "overhead" is the refinement's time over the rest of the same steps (the DFSPH work of
 //! that run), which stays meaningful when a shared machine's load drifts between runs;
 //! "step ratio" compares with the separate plain-DFSPH run.
+//!
+//! `--passes` times VRSPH's neighbour passes one by one against their data-movement floor:
+//! a pass over the same pairs that loads what the real pass loads (neighbour index, kernel
+//! gradient, the fields at j) and only adds it up. No arithmetic, however fast, takes a pass
+//! below its floor, so the floors summed over a method's passes bound its overhead from below.
 
 use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use super::mcvsph::sample_indices;
+use super::vrsph::{stream_function, stream_strength};
 use crate::bench::{dam_break_scene, measure_with, BenchArgs};
 use crate::run::{bodies, RunError};
 use crate::scene::PressureSolverKind;
+use crate::sph::lanes::F4;
+use crate::sph::neighbors::NeighborLists;
+use crate::sph::operators::{volumes, Operators, WallField};
+use crate::sph::packed::{fill, Field, Packed};
 use crate::sph::SphSolver;
 use crate::{Real, Vec3};
 use std::time::Instant;
@@ -61,6 +71,11 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
                     100.0 * r.refinement_ms / (r.ms_per_step - r.refinement_ms)
                 );
             }
+        }
+    }
+    if args.passes {
+        for &size in &args.sizes {
+            vrsph_pass_table(cube(size), args.warmup, args.steps)?;
         }
     }
     if args.mcvsph_error {
@@ -145,5 +160,165 @@ fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
             (tree_sq / direct_sq).sqrt()
         );
     }
+    Ok(())
+}
+
+/// The dam break at n^3 fluid particles after `warmup` steps, its mean DFSPH step over
+/// `steps` more, in ms, and its kinematic viscosity.
+fn warmed_dam_break(
+    n: usize,
+    warmup: u64,
+    steps: u64,
+) -> Result<(SphSolver, Real, Real), RunError> {
+    let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
+    let mut sph = SphSolver::new(&scene, bodies(&scene)?);
+    let unstable = |cause| RunError::Unstable {
+        cause,
+        frames: 0,
+        out: "(benchmark)".into(),
+    };
+    for _ in 0..warmup {
+        sph.advance().map_err(unstable)?;
+        sph.update_neighborhoods();
+    }
+    let t0 = Instant::now();
+    for _ in 0..steps {
+        sph.advance().map_err(unstable)?;
+        sph.update_neighborhoods();
+    }
+    let step_ms = 1e3 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
+    Ok((sph, step_ms, scene.viscosity.kinematic))
+}
+
+/// Median wall time of `f` over five runs, in ms.
+fn median_ms(mut f: impl FnMut()) -> Real {
+    let mut ms: Vec<Real> = (0..5)
+        .map(|_| {
+            let t0 = Instant::now();
+            f();
+            1e3 * t0.elapsed().as_secs_f64()
+        })
+        .collect();
+    ms.sort_by(Real::total_cmp);
+    ms[2]
+}
+
+/// The floor of a neighbour pass, into `out`: per particle, the sum over its fluid
+/// neighbours j of the `fields` at j, times the pair's kernel gradient where `grads` is given.
+fn floor_pass<const F: usize>(
+    lists: &NeighborLists,
+    fields: [&[F4]; F],
+    grads: Option<&[f32]>,
+    out: &mut Vec<F4>,
+) {
+    fill(out, lists.len(), |i| {
+        let range = lists.offsets[i] as usize..lists.offsets[i + 1] as usize;
+        let mut sum = F4::ZERO;
+        for (k, &j) in range.clone().zip(&lists.indices[range]) {
+            let loaded = fields.iter().fold(F4::ZERO, |s, f| s + f[j as usize]);
+            sum += match grads {
+                Some(g) => loaded * F4::load3(g, 3 * k),
+                None => loaded,
+            };
+        }
+        sum
+    })
+}
+
+/// VRSPH's four neighbour passes (`super::vrsph`, in its order) on the dam break at n^3
+/// particles, each against its floor, with DFSPH's density-rate pass and step for scale.
+fn vrsph_pass_table(n: usize, warmup: u64, steps: u64) -> Result<(), RunError> {
+    let (sph, step_ms, nu) = warmed_dam_break(n, warmup, steps)?;
+    let volume = volumes(sph.fluid.mass, &sph.fluid.density);
+    let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
+    let ops = Operators {
+        nb: sph.neighborhood(),
+        volume: &volume,
+        walls: scene.refinement.walls(),
+    };
+    let (lists, grads) = (ops.nb.fluid, Some(ops.nb.pairs.fluid.as_flattened()));
+    let count = sph.fluid.len();
+    let mut positions = Vec::new();
+    let packed = Packed::new(ops, &mut positions);
+    let (mut v, mut zeta, mut psi) = (Field::default(), Field::default(), Field::default());
+    packed.pack(&sph.fluid.v, &mut v);
+    let curl = ops.curl(&sph.fluid.v, WallField::Velocity);
+    packed.pack(&curl, &mut zeta);
+    let strength: Vec<F4> = (0..count)
+        .map(|i| stream_strength(volume[i], &curl[i]))
+        .collect();
+    stream_function(&packed, &strength, &mut psi);
+    let x = packed.positions();
+    // Every pass writes into buffers allocated once, as the refinements' own buffers are.
+    let (mut out, mut pair, mut vec, mut mat) =
+        (Field::default(), Vec::new(), Vec::new(), Vec::new());
+    let mut floor = Vec::new();
+    let passes: [(&str, Real, Real); 4] = [
+        (
+            "curl + Laplacian",
+            median_ms(|| {
+                fill(&mut pair, count, |i| {
+                    packed.curl_diffusion_at(i, &v, &zeta, nu)
+                })
+            }),
+            median_ms(|| floor_pass(lists, [v.lanes(), zeta.lanes(), x], grads, &mut floor)),
+        ),
+        (
+            "stream function",
+            median_ms(|| stream_function(&packed, &strength, &mut out)),
+            median_ms(|| floor_pass(lists, [psi.lanes(), x], None, &mut floor)),
+        ),
+        (
+            "curl of psi",
+            median_ms(|| {
+                fill(&mut vec, count, |i| {
+                    packed.curl_at(i, &psi, WallField::Zero)
+                })
+            }),
+            median_ms(|| floor_pass(lists, [psi.lanes()], grads, &mut floor)),
+        ),
+        (
+            "gradient",
+            median_ms(|| {
+                fill(&mut mat, count, |i| {
+                    packed.gradient_at(i, &v, WallField::Velocity)
+                })
+            }),
+            median_ms(|| floor_pass(lists, [v.lanes()], grads, &mut floor)),
+        ),
+    ];
+    let mut rate = Vec::new();
+    let density_rate = median_ms(|| {
+        fill(&mut rate, count, |i| {
+            ops.nb.density_rate(i, &sph.fluid.v, true)
+        })
+    });
+    println!(
+        "\nVRSPH's neighbour passes at {count} fluid particles, {:.1} M pairs (DFSPH step \
+         {step_ms:.1} ms; its density-rate pass {density_rate:.1} ms)",
+        lists.indices.len() as Real / 1e6
+    );
+    println!(
+        "{:<18} {:>8} {:>9} {:>11} {:>10} {:>12}",
+        "pass", "ms", "floor ms", "pass/floor", "% of step", "floor % step"
+    );
+    let (mut total, mut floor) = (0.0, 0.0);
+    let percent = |ms: Real| 100.0 * ms / step_ms;
+    for (name, ms, floor_ms) in passes {
+        println!(
+            "{name:<18} {ms:>8.1} {floor_ms:>9.1} {:>11.2} {:>9.1}% {:>11.1}%",
+            ms / floor_ms,
+            percent(ms),
+            percent(floor_ms)
+        );
+        (total, floor) = (total + ms, floor + floor_ms);
+    }
+    println!(
+        "{:<18} {total:>8.1} {floor:>9.1} {:>11.2} {:>9.1}% {:>11.1}%",
+        "all four",
+        total / floor,
+        percent(total),
+        percent(floor)
+    );
     Ok(())
 }

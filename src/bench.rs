@@ -7,7 +7,7 @@
 use crate::run::{bodies, RunError};
 use crate::scene::{self, PressureSolverKind, Scene};
 use crate::sph::neighbors::{cell_order, CellGrid, NeighborLists};
-use crate::sph::SphSolver;
+use crate::sph::{Instability, SphSolver};
 use crate::Real;
 use std::path::Path;
 use std::time::Instant;
@@ -86,6 +86,24 @@ pub fn dam_break_scene_with(n: usize, solver: PressureSolverKind, extra: &[Strin
         .expect("the built-in benchmark scene is valid")
 }
 
+/// A benchmark run's instability (no frames are written).
+pub fn unstable(cause: Instability) -> RunError {
+    RunError::Unstable {
+        cause,
+        frames: 0,
+        out: "(benchmark)".into(),
+    }
+}
+
+/// Runs `steps` steps of `sph`, each with its neighbourhood update.
+pub fn advance(sph: &mut SphSolver, steps: u64) -> Result<(), RunError> {
+    for _ in 0..steps {
+        sph.advance().map_err(unstable)?;
+        sph.update_neighborhoods();
+    }
+    Ok(())
+}
+
 /// Times `steps` steps after `warmup` steps of one configuration.
 pub fn measure(
     n: usize,
@@ -106,15 +124,7 @@ pub fn measure_with(
 ) -> Result<BenchResult, RunError> {
     let scene = dam_break_scene_with(n, solver, extra);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
-    let unstable = |cause| RunError::Unstable {
-        cause,
-        frames: 0,
-        out: "(benchmark)".into(),
-    };
-    for _ in 0..warmup {
-        sph.advance().map_err(unstable)?;
-        sph.update_neighborhoods();
-    }
+    advance(&mut sph, warmup)?;
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
     let (mut update, mut divergence, mut pressure) = (0.0, 0.0, 0.0);
     for _ in 0..steps {

@@ -13,7 +13,7 @@
 use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use super::mcvsph::sample_indices;
 use super::vrsph::{stream_function, stream_strength};
-use crate::bench::{dam_break_scene, measure_with, BenchArgs};
+use crate::bench::{advance, dam_break_scene, measure_with, BenchArgs};
 use crate::run::{bodies, RunError};
 use crate::scene::PressureSolverKind;
 use crate::sph::lanes::F4;
@@ -91,19 +91,7 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
 /// direct sum and by the treecode at its default opening parameter, with the tree's own error
 /// against the direct sum of the same sample (relative RMS).
 fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
-    let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
-    let mut sph = SphSolver::new(&scene, bodies(&scene)?);
-    let unstable = |cause| RunError::Unstable {
-        cause,
-        frames: 0,
-        out: "(benchmark)".into(),
-    };
-    let t0 = Instant::now();
-    for _ in 0..steps {
-        sph.advance().map_err(unstable)?;
-        sph.update_neighborhoods();
-    }
-    let step_ms = 1e3 * t0.elapsed().as_secs_f64() / steps as f64;
+    let (sph, step_ms, _) = warmed_dam_break(n, 0, steps)?;
     let omega = sph.vorticity();
     let x = &sph.fluid.x;
     let beta: Vec<Vec3> = omega
@@ -172,20 +160,9 @@ fn warmed_dam_break(
 ) -> Result<(SphSolver, Real, Real), RunError> {
     let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
-    let unstable = |cause| RunError::Unstable {
-        cause,
-        frames: 0,
-        out: "(benchmark)".into(),
-    };
-    for _ in 0..warmup {
-        sph.advance().map_err(unstable)?;
-        sph.update_neighborhoods();
-    }
+    advance(&mut sph, warmup)?;
     let t0 = Instant::now();
-    for _ in 0..steps {
-        sph.advance().map_err(unstable)?;
-        sph.update_neighborhoods();
-    }
+    advance(&mut sph, steps)?;
     let step_ms = 1e3 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
     Ok((sph, step_ms, scene.viscosity.kinematic))
 }

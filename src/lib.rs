@@ -11,6 +11,7 @@ pub mod geometry;
 pub mod grid;
 pub mod io;
 pub mod metrics;
+pub mod parallel;
 pub mod refine;
 pub mod run;
 pub mod scene;

@@ -5,6 +5,7 @@
 
 use super::multigrid::Multigrid;
 use super::stencil::FineStencil;
+use crate::parallel::ordered_sum;
 use rayon::prelude::*;
 
 /// Elements per parallel chunk of the vector operations.
@@ -45,15 +46,12 @@ pub(crate) struct Outcome {
 
 /// `r.z` with `z` the V-cycle's f32 output.
 fn dot_mixed(r: &[f64], z: &[f32]) -> f64 {
-    r.par_chunks(CHUNK)
-        .zip(z.par_chunks(CHUNK))
-        .map(|(r, z)| {
-            r.iter()
-                .zip(z)
-                .map(|(&r, &z)| r * f64::from(z))
-                .sum::<f64>()
-        })
-        .sum()
+    ordered_sum(r.par_chunks(CHUNK).zip(z.par_chunks(CHUNK)).map(|(r, z)| {
+        r.iter()
+            .zip(z)
+            .map(|(&r, &z)| r * f64::from(z))
+            .sum::<f64>()
+    }))
 }
 
 /// Solves `A x = b` from the initial guess in `ws.x` to `|r| <= tolerance |b|` (`b_norm = |b|`,
@@ -71,19 +69,20 @@ pub(crate) fn solve(
     let target = tolerance * b_norm;
     let mut rr = {
         let rhs = mg.rhs_mut();
-        r.par_chunks_mut(CHUNK)
-            .zip(rhs.par_chunks_mut(CHUNK))
-            .zip(b.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
-            .map(|((r, r32), (b, q))| {
-                let mut s = 0.0;
-                for (((r, r32), b), q) in r.iter_mut().zip(r32).zip(b).zip(q) {
-                    *r = b - q;
-                    *r32 = *r as f32;
-                    s += *r * *r;
-                }
-                s
-            })
-            .sum::<f64>()
+        ordered_sum(
+            r.par_chunks_mut(CHUNK)
+                .zip(rhs.par_chunks_mut(CHUNK))
+                .zip(b.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
+                .map(|((r, r32), (b, q))| {
+                    let mut s = 0.0;
+                    for (((r, r32), b), q) in r.iter_mut().zip(r32).zip(b).zip(q) {
+                        *r = b - q;
+                        *r32 = *r as f32;
+                        s += *r * *r;
+                    }
+                    s
+                }),
+        )
     };
     let outcome = |iterations: usize, rr: f64, non_finite: bool| Outcome {
         iterations,
@@ -116,22 +115,22 @@ pub(crate) fn solve(
         }
         let alpha = rho / pq;
         let rhs = mg.rhs_mut();
-        rr = x
-            .par_chunks_mut(CHUNK)
-            .zip(r.par_chunks_mut(CHUNK))
-            .zip(rhs.par_chunks_mut(CHUNK))
-            .zip(p.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
-            .map(|(((x, r), r32), (p, q))| {
-                let mut s = 0.0;
-                for ((((x, r), r32), p), q) in x.iter_mut().zip(r).zip(r32).zip(p).zip(q) {
-                    *x += alpha * p;
-                    *r -= alpha * q;
-                    *r32 = *r as f32;
-                    s += *r * *r;
-                }
-                s
-            })
-            .sum();
+        rr = ordered_sum(
+            x.par_chunks_mut(CHUNK)
+                .zip(r.par_chunks_mut(CHUNK))
+                .zip(rhs.par_chunks_mut(CHUNK))
+                .zip(p.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
+                .map(|(((x, r), r32), (p, q))| {
+                    let mut s = 0.0;
+                    for ((((x, r), r32), p), q) in x.iter_mut().zip(r).zip(r32).zip(p).zip(q) {
+                        *x += alpha * p;
+                        *r -= alpha * q;
+                        *r32 = *r as f32;
+                        s += *r * *r;
+                    }
+                    s
+                }),
+        );
         if !rr.is_finite() {
             return outcome(it, rr, true);
         }

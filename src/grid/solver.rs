@@ -16,8 +16,10 @@ use super::poisson::{CellKind, PoissonSystem, SolveError, SolverSettings};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
 use crate::geometry::{GeometryError, RigidBody};
+use crate::parallel::BLOCK;
 use crate::scene::{Advection, Body, Grid, Motion, Scene, SmokeSource, ViscosityScheme};
 use crate::{Point3, Real, Vec3};
+use rayon::prelude::*;
 
 /// Face layers inside static obstacles that advection sees extrapolated fluid velocity on:
 /// two cover the trilinear stencil of a departure point up to a cell inside a wall.
@@ -527,15 +529,21 @@ fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
 /// |after - before| / |before| over all faces (|after| when before is zero).
 fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
     let add = |(d1, n1): (Real, Real), (d2, n2): (Real, Real)| (d1 + d2, n1 + n2);
+    let terms = |(d, n): (Real, Real), b: &Real, a: &Real| (d + (a - b) * (a - b), n + b * b);
+    // Blocks in parallel, added in order (see `crate::parallel`); sequential for a
+    // non-contiguous array.
     let (diff, norm) = before
         .iter()
         .zip(after)
-        .map(|(b, a)| {
-            Zip::from(b).and(a).par_fold(
-                || (0.0, 0.0),
-                |(d, n), &b, &a| (d + (a - b) * (a - b), n + b * b),
-                add,
-            )
+        .map(|(b, a)| match (b.as_slice(), a.as_slice()) {
+            (Some(b), Some(a)) => b
+                .par_chunks(BLOCK)
+                .zip(a.par_chunks(BLOCK))
+                .map(|(b, a)| b.iter().zip(a).fold((0.0, 0.0), |s, (b, a)| terms(s, b, a)))
+                .collect::<Vec<_>>()
+                .into_iter()
+                .fold((0.0, 0.0), add),
+            _ => Zip::from(b).and(a).fold((0.0, 0.0), terms),
         })
         .fold((0.0, 0.0), add);
     if norm > 0.0 {

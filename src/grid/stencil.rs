@@ -14,6 +14,7 @@
 //! fluid region) take a fast path with no weights at all.
 
 use super::layout::{Layout, RowNeighbours};
+use crate::parallel::ordered_sum;
 use rayon::prelude::*;
 use std::ops::{Add, Mul};
 
@@ -356,7 +357,7 @@ impl FineStencil {
             dot
         };
         if l.len() >= PARALLEL_MIN_CELLS {
-            y.par_chunks_mut(l.slab()).enumerate().map(slab).sum()
+            ordered_sum(y.par_chunks_mut(l.slab()).enumerate().map(slab))
         } else {
             y.chunks_mut(l.slab()).enumerate().map(slab).sum()
         }

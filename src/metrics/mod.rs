@@ -3,6 +3,7 @@
 pub mod probes;
 pub mod series;
 
+use crate::parallel::sum_by;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -11,12 +12,12 @@ pub use series::MetricsRecorder;
 
 /// Kinetic energy sum_i m |v_i|^2 / 2, J.
 pub fn kinetic_energy(mass: Real, v: &[Vec3]) -> Real {
-    0.5 * mass * v.par_iter().map(|v| v.norm_squared()).sum::<Real>()
+    0.5 * mass * sum_by(v, |v| v.norm_squared())
 }
 
 /// Potential energy -sum_i m g . x_i, J (zero at the origin).
 pub fn potential_energy(mass: Real, x: &[Vec3], gravity: &Vec3) -> Real {
-    -mass * x.par_iter().map(|x| gravity.dot(x)).sum::<Real>()
+    -mass * sum_by(x, |x| gravity.dot(x))
 }
 
 /// Average and maximum compression max(rho / rho_0 - 1, 0) over the particles. Only
@@ -26,12 +27,12 @@ pub fn density_errors(density: &[Real], rest_density: Real) -> (Real, Real) {
     if density.is_empty() {
         return (0.0, 0.0);
     }
-    let (sum, max) = density
+    let compression = |rho: &Real| (rho / rest_density - 1.0).max(0.0);
+    let max = density
         .par_iter()
-        .map(|rho| (rho / rest_density - 1.0).max(0.0))
-        .fold(|| (0.0, 0.0), |(s, m), e| (s + e, Real::max(m, e)))
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
-    (sum / density.len() as Real, max)
+        .map(compression)
+        .reduce(|| 0.0, Real::max);
+    (sum_by(density, compression) / density.len() as Real, max)
 }
 
 /// Vorticity statistics of a fluid: mean and largest |omega|, and the enstrophy
@@ -48,20 +49,10 @@ pub fn vorticity_stats(omega: &[Vec3], volume: Real) -> VorticityStats {
     if omega.is_empty() {
         return VorticityStats::default();
     }
-    let (sum, max, sq) = omega
-        .par_iter()
-        .map(|w| {
-            let m = w.norm();
-            (m, m, m * m)
-        })
-        .reduce(
-            || (0.0, 0.0, 0.0),
-            |a, b| (a.0 + b.0, Real::max(a.1, b.1), a.2 + b.2),
-        );
     VorticityStats {
-        mean: sum / omega.len() as Real,
-        max,
-        enstrophy: 0.5 * volume * sq,
+        mean: sum_by(omega, |w| w.norm()) / omega.len() as Real,
+        max: max_speed(omega),
+        enstrophy: 0.5 * volume * sum_by(omega, |w| w.norm_squared()),
     }
 }
 

@@ -59,13 +59,7 @@ impl Refiner for Micropolar {
     }
 
     fn rotational_energy(&self, mass: Real) -> Real {
-        0.5 * mass
-            * self.inertia
-            * self
-                .omega
-                .par_iter()
-                .map(|w| w.norm_squared())
-                .sum::<Real>()
+        0.5 * mass * self.inertia * crate::parallel::sum_by(&self.omega, |w| w.norm_squared())
     }
 
     fn fields(&self) -> Vec<(&'static str, &[Vec3])> {

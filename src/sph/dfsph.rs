@@ -130,6 +130,6 @@ pub fn mean_positive(values: &[Real]) -> Real {
     if values.is_empty() {
         0.0
     } else {
-        values.par_iter().map(|v| v.max(0.0)).sum::<Real>() / values.len() as Real
+        crate::parallel::sum_by(values, |v| v.max(0.0)) / values.len() as Real
     }
 }

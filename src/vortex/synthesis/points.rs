@@ -35,49 +35,60 @@ fn sums(
     vorticity: &[Vec3],
 ) -> Vec<Sums> {
     let n = particles.len();
-    points
-        .par_iter()
-        .zip(vorticity.par_iter())
-        .fold(
-            || (vec![[0.0; 3]; n], Vec::new()),
-            |(mut sums, mut near), (x, have)| {
-                near.clear();
-                hash.for_each_near(x, reach, |q| {
-                    if (x - particles.x[q]).norm() < kernel::velocity_radius(particles.sigma[q]) {
-                        near.push(q);
-                    }
-                });
-                let desired: Vec3 = near
-                    .iter()
-                    .map(|&q| {
-                        kernel::vorticity(
-                            &particles.omega[q],
-                            particles.sigma[q],
-                            &(x - particles.x[q]),
-                        )
-                    })
-                    .sum();
-                for &q in &near {
-                    if (x - particles.x[q]).norm() < particles.radius(q) {
-                        accumulate(&mut sums[q], &desired, have, &axis(&particles.omega[q]));
-                    }
+    // Blocks of points accumulate in parallel, and their sums are added in block order, a wave
+    // of blocks at a time (so that the result does not depend on scheduling; see
+    // `crate::parallel`).
+    let block_sums = |(xs, haves): (&[Vec3], &[Vec3])| {
+        let (mut sums, mut near) = (vec![[0.0; 3]; n], Vec::new());
+        for (x, have) in xs.iter().zip(haves) {
+            near.clear();
+            hash.for_each_near(x, reach, |q| {
+                if (x - particles.x[q]).norm() < kernel::velocity_radius(particles.sigma[q]) {
+                    near.push(q);
                 }
-                (sums, near)
-            },
-        )
-        .map(|(sums, _)| sums)
-        .reduce(
-            || vec![[0.0; 3]; n],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(&b) {
-                    for c in 0..3 {
-                        x[c] += y[c];
-                    }
+            });
+            let desired: Vec3 = near
+                .iter()
+                .map(|&q| {
+                    kernel::vorticity(
+                        &particles.omega[q],
+                        particles.sigma[q],
+                        &(x - particles.x[q]),
+                    )
+                })
+                .sum();
+            for &q in &near {
+                if (x - particles.x[q]).norm() < particles.radius(q) {
+                    accumulate(&mut sums[q], &desired, have, &axis(&particles.omega[q]));
                 }
-                a
-            },
-        )
+            }
+        }
+        sums
+    };
+    let mut total = vec![[0.0; 3]; n];
+    let wave = POINTS_PER_BLOCK * BLOCKS_PER_WAVE;
+    for (xs, haves) in points.chunks(wave).zip(vorticity.chunks(wave)) {
+        let blocks: Vec<Vec<Sums>> = xs
+            .par_chunks(POINTS_PER_BLOCK)
+            .zip(haves.par_chunks(POINTS_PER_BLOCK))
+            .map(block_sums)
+            .collect();
+        for block in &blocks {
+            for (t, s) in total.iter_mut().zip(block) {
+                for c in 0..3 {
+                    t[c] += s[c];
+                }
+            }
+        }
+    }
+    total
 }
+
+/// Points per block of the Eq. 14 sums.
+const POINTS_PER_BLOCK: usize = 1 << 13;
+
+/// Blocks summed in parallel before their sums are added (each holds a sum per particle).
+const BLOCKS_PER_WAVE: usize = 16;
 
 /// The weighted kernel velocities (Eq. 12) at the points.
 fn velocity(

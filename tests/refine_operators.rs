@@ -224,9 +224,6 @@ fn packed_operators_equal_the_f64_ones() {
     }
 }
 
-/// The walls switch: fluid sliding at 1 m/s over the static floor of its tank has no curl with
-/// fluid-only operators, and with walls in the operators the floor's shear reads as
-/// vorticity of the sign of a no-slip boundary layer (d v_x / dy > 0, so omega_z < 0).
 /// The packed stream function VRSPH uses (f32, with the hardware reciprocal square root and
 /// one Newton step on x86_64) equals Liu Eq. 15 summed directly in f64, to 1e-5 of the sum of
 /// its terms' magnitudes (f32 rounding over about 30 terms, a few 1e-7).
@@ -268,6 +265,9 @@ fn stream_function_is_eq_15() {
     );
 }
 
+/// The walls switch: fluid sliding at 1 m/s over the static floor of its tank has no curl with
+/// fluid-only operators, and with walls in the operators the floor's shear reads as
+/// vorticity of the sign of a no-slip boundary layer (d v_x / dy > 0, so omega_z < 0).
 #[test]
 fn walls_switch_decides_whether_a_sliding_wall_is_vorticity() {
     for walls in [false, true] {

@@ -9,7 +9,7 @@ use eddy::scene::{self, Scene};
 use eddy::sph::lanes::F4;
 use eddy::sph::neighbors::cell_order;
 use eddy::sph::operators::{curl_of, per_particle, volumes, Operators, WallField};
-use eddy::sph::packed::{Field, Packed};
+use eddy::sph::packed::{Field, Packed, Quantity};
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
@@ -143,7 +143,7 @@ fn laplacian_is_eq_8_and_vanishes_on_linear_fields() {
         walls: false,
     };
     let mut positions = Vec::new();
-    let packed = Packed::new(ops, &mut positions);
+    let packed = Packed::new(ops, &mut positions, &s.fluid.v);
     let (mut v, mut a_packed) = (Field::default(), Field::default());
     packed.pack(&s.fluid.v, &mut v);
     let curl = ops.curl(&s.fluid.v, WallField::Velocity);
@@ -201,7 +201,7 @@ fn packed_operators_equal_the_f64_ones() {
             walls,
         };
         let mut positions = Vec::new();
-        let packed = Packed::new(ops, &mut positions);
+        let packed = Packed::new(ops, &mut positions, &s.fluid.v);
         let mut v = Field::default();
         packed.pack(&s.fluid.v, &mut v);
         let curl = ops.curl(&s.fluid.v, WallField::Velocity);
@@ -238,7 +238,7 @@ fn stream_function_is_eq_15() {
     };
     let zeta = ops.curl(&s.fluid.v, WallField::Velocity);
     let mut positions = Vec::new();
-    let packed = Packed::new(ops, &mut positions);
+    let packed = Packed::new(ops, &mut positions, &s.fluid.v);
     let strength: Vec<F4> = (0..zeta.len())
         .map(|i| vrsph::stream_strength(vol[i], &zeta[i]))
         .collect();
@@ -263,6 +263,34 @@ fn stream_function_is_eq_15() {
         worst < 1e-5,
         "packed Eq. 15 is off by {worst:e} of its terms"
     );
+}
+
+/// The noise floor of packed fields is 1e-12 of the step's largest speed U, times 1/h for a
+/// vorticity and h for a stream function (h the support): components below it pack as zero,
+/// components above it are kept.
+#[test]
+fn noise_floor_scales_with_the_speed_and_the_quantity() {
+    let (s, _) = rotating_block();
+    let vol = volumes(s.fluid.mass, &s.fluid.density);
+    let ops = Operators {
+        nb: s.neighborhood(),
+        volume: &vol,
+        walls: false,
+    };
+    let speed = s.fluid.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+    assert!(speed > 0.1);
+    let h = ops.nb.kernel.support();
+    let mut positions = Vec::new();
+    let packed = Packed::new(ops, &mut positions, &s.fluid.v);
+    for (quantity, unit) in [
+        (Quantity::Velocity, speed),
+        (Quantity::Vorticity, speed / h),
+        (Quantity::StreamFunction, speed * h),
+    ] {
+        let a = Vec3::new(0.9e-12 * unit, -1.1e-12 * unit, -0.5e-12 * unit);
+        let kept = packed.denoise(quantity, a);
+        assert_eq!(kept, Vec3::new(0.0, a.y, 0.0), "{quantity:?}");
+    }
 }
 
 /// The walls switch: fluid sliding at 1 m/s over the static floor of its tank has no curl with
@@ -318,7 +346,7 @@ fn a_single_vortex_turns_in_the_sense_of_its_vorticity() {
     let mut single = vec![Vec3::zeros(); s.fluid.len()];
     single[c] = Vec3::z();
     let mut positions = Vec::new();
-    let packed = Packed::new(ops, &mut positions);
+    let packed = Packed::new(ops, &mut positions, &s.fluid.v);
     let lost: Vec<F4> = single.iter().map(|l| F4::from_vec(l, 0.0)).collect();
     let (mut induced, mut psi) = (Field::default(), Field::default());
     rankine::induced_velocity(&packed, &lost, 0.5 * SPACING, &mut induced);

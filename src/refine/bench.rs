@@ -216,7 +216,7 @@ fn vrsph_pass_table(n: usize, warmup: u64, steps: u64) -> Result<(), RunError> {
     let (lists, grads) = (ops.nb.fluid, Some(ops.nb.pairs.fluid.as_flattened()));
     let count = sph.fluid.len();
     let mut positions = Vec::new();
-    let packed = Packed::new(ops, &mut positions);
+    let packed = Packed::new(ops, &mut positions, &sph.fluid.v);
     let (mut v, mut zeta, mut psi) = (Field::default(), Field::default(), Field::default());
     packed.pack(&sph.fluid.v, &mut v);
     let curl = ops.curl(&sph.fluid.v, WallField::Velocity);

@@ -37,7 +37,7 @@ use super::{add_scaled, Refiner, StepContext};
 use crate::sph::lanes::F4;
 use crate::sph::neighbors::permute;
 use crate::sph::operators::{curl_of, Operators, WallField};
-use crate::sph::packed::{fill, Field, Packed};
+use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -124,10 +124,11 @@ impl Refiner for Mcvsph {
         // enough. At 1 % vortex particles that ring holds three quarters of the fluid, and
         // taking the curl everywhere costs less than finding the ring (measured at 389k).
         self.mark_reach(&ctx.ops);
-        let ops = Packed::new(ctx.ops, &mut self.positions);
+        let ops = Packed::new(ctx.ops, &mut self.positions, v);
         let (reach, velocity) = (&self.reach, &mut self.velocity);
         ops.pack(v, velocity);
-        ops.field_with(&mut self.omega, &mut self.stretch, None, |i| {
+        let (omega, stretch) = (&mut self.omega, &mut self.stretch);
+        ops.field_with(omega, stretch, Quantity::Vorticity, None, |i| {
             if reach[i] {
                 let g = ops.gradient_at(i, velocity, WallField::Velocity);
                 let omega = curl_of(&g);
@@ -142,7 +143,7 @@ impl Refiner for Mcvsph {
         if self.volume_coefficient == 0.0 || self.omega.len() != v.len() {
             return;
         }
-        let ops = Packed::new(ctx.ops, &mut self.positions);
+        let ops = Packed::new(ctx.ops, &mut self.positions, v);
         let (omega, stretch, (nu, dt)) = (&self.omega, &self.stretch, (ctx.nu, ctx.dt));
         // The ideal omega^(n+1) = omega^n + dt ((omega^n . grad) v^n + nu Laplacian omega^n)
         // (Eq. 18, Alg. 1) less the curl after the projection (Eq. 20), in one pass: the

@@ -34,7 +34,7 @@ use super::{Refiner, StepContext};
 use crate::sph::lanes::{CrossSum, F4};
 use crate::sph::neighbors::permute;
 use crate::sph::operators::{per_particle, WallField};
-use crate::sph::packed::{Field, Packed};
+use crate::sph::packed::{Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -86,7 +86,7 @@ impl Refiner for Rankine {
         if *beta == 0.0 {
             return;
         }
-        let ops = Packed::new(ctx.ops, positions);
+        let ops = Packed::new(ctx.ops, positions, v);
         let rc = core_radius(
             *beta,
             ctx.nu,
@@ -104,7 +104,7 @@ impl Refiner for Rankine {
         let pairs = previous.par_iter_mut().zip(lost.par_iter_mut());
         pairs.enumerate().for_each(|(i, (previous, lost))| {
             let omega = ops.curl_at(i, now, WallField::Velocity);
-            *lost = F4::from_vec(&(*previous - omega), 0.0);
+            *lost = F4::from_vec(&ops.denoise(Quantity::Vorticity, *previous - omega), 0.0);
             *previous = omega;
         });
         induced_velocity(&ops, lost, rc, dv);
@@ -133,7 +133,7 @@ pub fn core_radius(beta: Real, nu: Real, dt: Real, spacing: Real, support: Real)
 /// f(r) = r_c^2 / (2 r) outside the core and r / 2 inside (Wang et al. Eqs. 9, 15).
 pub fn induced_velocity(ops: &Packed, lost: &[F4], rc: Real, dv: &mut Field) {
     let rc2 = (rc * rc) as f32;
-    ops.field(dv, None, |j| {
+    ops.field(dv, Quantity::Velocity, None, |j| {
         let mut dv = CrossSum::default();
         // x_ji = x_j - x_i points from core i to particle j.
         ops.pairs(j, |i, xji| {

@@ -39,7 +39,7 @@ use super::{Refiner, StepContext};
 use crate::sph::lanes::F4;
 use crate::sph::neighbors::permute;
 use crate::sph::operators::{curl_of, WallField};
-use crate::sph::packed::{fill, Field, Packed};
+use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -95,14 +95,14 @@ impl Refiner for Vrsph {
         if *alpha == 0.0 {
             return;
         }
-        let ops = Packed::new(ctx.ops, positions);
+        let ops = Packed::new(ctx.ops, positions, v);
         if zeta.len() == v.len() {
             let (nu, dt) = (ctx.nu, ctx.dt);
             ops.pack(v, velocity);
             fill(strength, v.len(), |i| {
                 let (now, diffusion) = ops.curl_diffusion_at(i, velocity, zeta, nu);
                 let loss = zeta.vec(i) + dt * (stretch[i] + diffusion) - now;
-                stream_strength(ops.ops.volume[i], &loss)
+                stream_strength(ops.ops.volume[i], &ops.denoise(Quantity::Vorticity, loss))
             });
             stream_function(&ops, strength, psi);
             v.par_iter_mut()
@@ -110,7 +110,7 @@ impl Refiner for Vrsph {
                 .for_each(|(i, v)| *v += *alpha * ops.curl_at(i, psi, WallField::Zero));
         }
         ops.pack(v, velocity);
-        ops.field_with(zeta, stretch, None, |i| {
+        ops.field_with(zeta, stretch, Quantity::Vorticity, None, |i| {
             let grad = ops.gradient_at(i, velocity, WallField::Velocity);
             let zeta = curl_of(&grad);
             (zeta, grad * zeta)
@@ -136,7 +136,7 @@ pub fn stream_function(ops: &Packed, strength: &[F4], psi: &mut Field) {
     let e = stream_core(ops.ops.nb.volume);
     let e2 = (e * e) as f32;
     let self_weight = F4::splat((1.0 / e) as f32);
-    ops.field(psi, None, |i| {
+    ops.field(psi, Quantity::StreamFunction, None, |i| {
         let mut psi = strength[i] * self_weight;
         ops.pairs(i, |j, xij| {
             psi += strength[j] * F4::splat(xij.dot3(xij) + e2).rsqrt()

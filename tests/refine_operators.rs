@@ -50,6 +50,15 @@ fn interior(s: &SphSolver, margin: Real) -> Vec<usize> {
         .collect()
 }
 
+/// The operators of `s` over its fluid alone, with volumes `vol`.
+fn fluid_ops<'a>(s: &'a SphSolver, vol: &'a [Real]) -> Operators<'a> {
+    Operators {
+        nb: s.neighborhood(),
+        volume: vol,
+        walls: false,
+    }
+}
+
 fn centre() -> Vec3 {
     Vec3::new(0.16, 0.16, 0.16)
 }
@@ -75,11 +84,7 @@ fn rotating_block() -> (SphSolver, Vec3) {
 fn solid_body_rotation_has_curl_twice_the_angular_velocity() {
     let (s, w) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
-    let ops = Operators {
-        nb: s.neighborhood(),
-        volume: &vol,
-        walls: false,
-    };
+    let ops = fluid_ops(&s, &vol);
     let curl = ops.curl(&s.fluid.v, WallField::Velocity);
     let grad = ops.gradient(&s.fluid.v, WallField::Velocity);
     let inside = interior(&s, 2.0 * SPACING + 1e-9);
@@ -137,11 +142,7 @@ fn uniform_flow_has_zero_curl() {
 fn laplacian_is_eq_8_and_vanishes_on_linear_fields() {
     let (s, _) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
-    let ops = Operators {
-        nb: s.neighborhood(),
-        volume: &vol,
-        walls: false,
-    };
+    let ops = fluid_ops(&s, &vol);
     let mut positions = Vec::new();
     let packed = Packed::new(ops, &mut positions, &s.fluid.v);
     let (mut v, mut a_packed) = (Field::default(), Field::default());
@@ -231,11 +232,7 @@ fn packed_operators_equal_the_f64_ones() {
 fn stream_function_is_eq_15() {
     let (s, _) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
-    let ops = Operators {
-        nb: s.neighborhood(),
-        volume: &vol,
-        walls: false,
-    };
+    let ops = fluid_ops(&s, &vol);
     let zeta = ops.curl(&s.fluid.v, WallField::Velocity);
     let mut positions = Vec::new();
     let packed = Packed::new(ops, &mut positions, &s.fluid.v);
@@ -272,11 +269,7 @@ fn stream_function_is_eq_15() {
 fn noise_floor_scales_with_the_speed_and_the_quantity() {
     let (s, _) = rotating_block();
     let vol = volumes(s.fluid.mass, &s.fluid.density);
-    let ops = Operators {
-        nb: s.neighborhood(),
-        volume: &vol,
-        walls: false,
-    };
+    let ops = fluid_ops(&s, &vol);
     let speed = s.fluid.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
     assert!(speed > 0.1);
     let h = ops.nb.kernel.support();

@@ -131,15 +131,18 @@ pub fn stream_strength(volume: Real, zeta: &Vec3) -> F4 {
 }
 
 /// The local stream function (Liu Eq. 15) of the strengths s_j = V_j zeta_j / (4 pi)
-/// ([`stream_strength`]), into `psi`: psi_i = sum_{j in N(i) + i} s_j / sqrt(|x_ij|^2 + e^2).
+/// ([`stream_strength`]), into `psi`: psi_i = sum_{j in N(i) + i} s_j / sqrt(|x_ij|^2 + e^2),
+/// four neighbours' weights at a time ([`Packed::quads`]).
 pub fn stream_function(ops: &Packed, strength: &[F4], psi: &mut Field) {
     let e = stream_core(ops.ops.nb.volume);
-    let e2 = (e * e) as f32;
+    let e2 = F4::splat((e * e) as f32);
     let self_weight = F4::splat((1.0 / e) as f32);
     ops.field(psi, Quantity::StreamFunction, None, |i| {
         let mut psi = strength[i] * self_weight;
-        ops.pairs(i, |j, xij| {
-            psi += strength[j] * F4::splat(xij.dot3(xij) + e2).rsqrt()
+        ops.quads(i, |j, n, [x, y, z]| {
+            let w = (x * x + y * y + z * z + e2).rsqrt() * F4::first(n);
+            psi += (strength[j[0]] * w.lane::<0>() + strength[j[1]] * w.lane::<1>())
+                + (strength[j[2]] * w.lane::<2>() + strength[j[3]] * w.lane::<3>());
         });
         psi.vec()
     })

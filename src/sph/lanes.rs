@@ -3,7 +3,9 @@
 //! A particle's 3-vector and one scalar fill one 16-byte load, and a pair's cross or outer
 //! product becomes a few four-lane operations. The lanes run across a vector's components, not
 //! across neighbours: eight neighbours at once need hardware gathers, which measured four
-//! times slower than this on Zen 4.
+//! times slower than this on Zen 4. Where a pair's work is one scalar of the distance (VRSPH's
+//! stream function), four neighbours' loads are transposed into rows instead
+//! ([`F4::transpose3`]).
 
 use crate::{Real, Vec3};
 use std::ops::{Add, AddAssign, Mul, Sub};
@@ -77,6 +79,27 @@ impl F4 {
     #[inline(always)]
     pub fn dot3(self, o: Self) -> f32 {
         imp::sum3(imp::mul(self.0, o.0))
+    }
+
+    /// Ones in the first `n` lanes, zeros in the others (`n` <= 4).
+    #[inline(always)]
+    pub fn first(n: usize) -> Self {
+        const MASKS: [[f32; 4]; 5] = [
+            [0.0; 4],
+            [1.0, 0.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0, 0.0],
+            [1.0; 4],
+        ];
+        F4(imp::load(&MASKS[n]))
+    }
+
+    /// The first three lanes of four vectors as three rows (x, y, z), lane k of each row from
+    /// `v[k]`: four neighbours side by side, so that a per-pair scalar such as a distance is
+    /// one four-lane operation.
+    #[inline(always)]
+    pub fn transpose3(v: [F4; 4]) -> [F4; 3] {
+        imp::transpose3(v.map(|v| v.0)).map(F4)
     }
 
     /// The 3-vector stored at `flat[at..at + 3]` (the fourth lane reads `flat[at + 3]` when it
@@ -167,6 +190,19 @@ mod imp {
         unsafe { _mm_shuffle_ps::<0b11_00_10_01>(v, v) }
     }
     #[inline(always)]
+    pub fn transpose3([a, b, c, d]: [Lanes; 4]) -> [Lanes; 3] {
+        unsafe {
+            // (x0 x1 y0 y1), (x2 x3 y2 y3), (z0 z1 w0 w1), (z2 z3 w2 w3).
+            let (ab, cd) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
+            let (ab_z, cd_z) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
+            [
+                _mm_movelh_ps(ab, cd),
+                _mm_movehl_ps(cd, ab),
+                _mm_movelh_ps(ab_z, cd_z),
+            ]
+        }
+    }
+    #[inline(always)]
     pub fn sum3(v: Lanes) -> f32 {
         unsafe {
             let xy = _mm_add_ss(v, _mm_shuffle_ps::<0x55>(v, v));
@@ -185,6 +221,7 @@ mod imp {
     pub fn mul(a: Lanes, b: Lanes) -> Lanes {
         unsafe { _mm_mul_ps(a, b) }
     }
+
     #[inline(always)]
     pub fn rsqrt(v: Lanes) -> Lanes {
         unsafe {
@@ -219,6 +256,9 @@ mod imp {
     pub fn yzx(v: Lanes) -> Lanes {
         [v[1], v[2], v[0], v[3]]
     }
+    pub fn transpose3(v: [Lanes; 4]) -> [Lanes; 3] {
+        std::array::from_fn(|row| v.map(|v| v[row]))
+    }
     pub fn sum3(v: Lanes) -> f32 {
         v[0] + v[1] + v[2]
     }
@@ -231,6 +271,7 @@ mod imp {
     pub fn mul(a: Lanes, b: Lanes) -> Lanes {
         std::array::from_fn(|k| a[k] * b[k])
     }
+
     pub fn rsqrt(v: Lanes) -> Lanes {
         v.map(|x| 1.0 / x.sqrt())
     }
@@ -253,5 +294,33 @@ impl CrossSum {
     #[inline(always)]
     pub fn total(self) -> Vec3 {
         (self.0 - self.1).yzx().vec()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::F4;
+
+    #[test]
+    fn transpose3_puts_neighbour_k_in_lane_k() {
+        let v: [F4; 4] = std::array::from_fn(|k| {
+            let k = k as f32;
+            F4::new(k, 10.0 + k, 20.0 + k, -1.0)
+        });
+        let rows = F4::transpose3(v).map(F4::to_array);
+        for (c, row) in rows.iter().enumerate() {
+            for (k, &x) in row.iter().enumerate() {
+                assert_eq!(x, v[k].to_array()[c], "component {c} of neighbour {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn first_masks_the_lanes_after_n() {
+        for n in 0..=4 {
+            let mask = F4::first(n).to_array();
+            assert_eq!(mask.iter().filter(|&&m| m == 1.0).count(), n);
+            assert!(mask[..n].iter().all(|&m| m == 1.0) && mask[n..].iter().all(|&m| m == 0.0));
+        }
     }
 }

@@ -221,7 +221,6 @@ mod imp {
     pub fn mul(a: Lanes, b: Lanes) -> Lanes {
         unsafe { _mm_mul_ps(a, b) }
     }
-
     #[inline(always)]
     pub fn rsqrt(v: Lanes) -> Lanes {
         unsafe {
@@ -271,7 +270,6 @@ mod imp {
     pub fn mul(a: Lanes, b: Lanes) -> Lanes {
         std::array::from_fn(|k| a[k] * b[k])
     }
-
     pub fn rsqrt(v: Lanes) -> Lanes {
         v.map(|x| 1.0 / x.sqrt())
     }
@@ -319,7 +317,6 @@ mod tests {
     fn first_masks_the_lanes_after_n() {
         for n in 0..=4 {
             let mask = F4::first(n).to_array();
-            assert_eq!(mask.iter().filter(|&&m| m == 1.0).count(), n);
             assert!(mask[..n].iter().all(|&m| m == 1.0) && mask[n..].iter().all(|&m| m == 0.0));
         }
     }

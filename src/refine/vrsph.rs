@@ -41,7 +41,6 @@ use crate::sph::neighbors::permute;
 use crate::sph::operators::{curl_of, WallField};
 use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// VRSPH with gain alpha.
@@ -105,11 +104,12 @@ impl Refiner for Vrsph {
                 stream_strength(ops.ops.volume[i], &ops.denoise(Quantity::Vorticity, loss))
             });
             stream_function(&ops, strength, psi);
-            v.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, v)| *v += *alpha * ops.curl_at(i, psi, WallField::Zero));
+            ops.update(v, velocity, Quantity::Velocity, |i, v| {
+                v + *alpha * ops.curl_at(i, psi, WallField::Zero)
+            });
+        } else {
+            ops.pack(v, velocity);
         }
-        ops.pack(v, velocity);
         ops.field_with(zeta, stretch, Quantity::Vorticity, None, |i| {
             let grad = ops.gradient_at(i, velocity, WallField::Velocity);
             let zeta = curl_of(&grad);

@@ -165,5 +165,13 @@ pub fn per_particle<T: Default + Send>(
 
 /// V_j = m / rho_j for every fluid particle.
 pub fn volumes(mass: Real, density: &[Real]) -> Vec<Real> {
-    density.par_iter().map(|rho| mass / rho).collect()
+    let mut out = Vec::new();
+    volumes_into(mass, density, &mut out);
+    out
+}
+
+/// [`volumes`] into `out`, keeping its allocation (the solver refills it every step).
+pub fn volumes_into(mass: Real, density: &[Real], out: &mut Vec<Real>) {
+    out.clear();
+    out.par_extend(density.par_iter().map(|rho| mass / rho));
 }

@@ -191,6 +191,26 @@ impl<'a> Packed<'a> {
         });
     }
 
+    /// Sets `values[i]` to `f(i, values[i])` at every particle and packs the new field of
+    /// `quantity` into `out`, in the same pass (VRSPH's refined velocity, which its gradient
+    /// reads next).
+    pub fn update(
+        &self,
+        values: &mut [Vec3],
+        out: &mut Field,
+        quantity: Quantity,
+        f: impl Fn(usize, Vec3) -> Vec3 + Sync,
+    ) {
+        let volume = self.ops.volume;
+        let floor = self.floor(quantity);
+        out.0.resize(values.len(), F4::ZERO);
+        let pairs = out.0.par_iter_mut().zip(values.par_iter_mut());
+        pairs.enumerate().for_each(|(i, (o, a))| {
+            *a = f(i, *a);
+            *o = F4::from_vec(&below(*a, floor), volume[i]);
+        });
+    }
+
     /// Calls `f(j, x_i - x_j)` for every fluid neighbour j of i.
     #[inline(always)]
     pub fn pairs(&self, i: usize, mut f: impl FnMut(usize, F4)) {

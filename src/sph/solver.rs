@@ -108,6 +108,9 @@ pub struct SphSolver {
     last_dt: Option<Real>,
     /// The turbulence refinement, if the scene has one.
     refiner: Option<Box<dyn Refiner>>,
+    /// Per fluid particle m / rho, the volume of the refinements' operators (kept across
+    /// steps for its memory).
+    refine_volume: Vec<Real>,
     /// Boundary samples take part in the difference operators (`refinement.walls`).
     walls_in_operators: bool,
 }
@@ -171,6 +174,7 @@ impl SphSolver {
             step: 0,
             last_dt: None,
             refiner: refine::build(&scene.refinement, n, scene.seed),
+            refine_volume: Vec::new(),
             walls_in_operators: scene.refinement.walls(),
         };
         me.update_neighborhoods();
@@ -336,11 +340,11 @@ impl SphSolver {
             nu: self.viscosity.kinematic,
             spacing: self.spacing,
         };
-        let mut volume = Vec::new();
+        let volume = &mut self.refine_volume;
         if let Some(r) = self.refiner.as_mut() {
             let start = Instant::now();
-            volume = operators::volumes(*mass, density);
-            r.before_advection(&refine_ctx(&volume), v, &mut accel);
+            operators::volumes_into(*mass, density, volume);
+            r.before_advection(&refine_ctx(volume), v, &mut accel);
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
         v.par_iter_mut()
@@ -376,7 +380,7 @@ impl SphSolver {
         stats.pressure_seconds = start.elapsed().as_secs_f64();
         if let Some(r) = self.refiner.as_mut() {
             let start = Instant::now();
-            r.after_pressure(&refine_ctx(&volume), v);
+            r.after_pressure(&refine_ctx(volume), v);
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
@@ -463,7 +467,10 @@ impl SphSolver {
             + self.fluid_lists.memory_bytes()
             + self.boundary_lists.memory_bytes()
             + self.pairs.memory_bytes()
-            + (self.density_ratio.capacity() + self.factor.capacity()) * std::mem::size_of::<Real>()
+            + (self.density_ratio.capacity()
+                + self.factor.capacity()
+                + self.refine_volume.capacity())
+                * std::mem::size_of::<Real>()
     }
 }
 

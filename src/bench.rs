@@ -61,17 +61,24 @@ pub struct BenchResult {
     pub refinement_ms: f64,
 }
 
-/// The benchmark scene with a cube of `n`^3 fluid particles; at n = 46 it is the reference
-/// set-up exactly (radius 0.0106 m), other sizes scale the spacing so the cube stays ~1 m.
-pub fn dam_break_scene(n: usize, solver: PressureSolverKind) -> Scene {
-    dam_break_scene_with(n, solver, &[])
+/// The cube edge, in particles, of the benchmark scene nearest to `size` fluid particles
+/// (at least 4).
+pub fn cube_edge(size: usize) -> usize {
+    (size as f64).cbrt().round().max(4.0) as usize
+}
+
+/// The benchmark scene with a cube of `edge`^3 fluid particles (`edge` particles along each
+/// side, not a particle count); at edge = 46 it is the reference set-up exactly (radius
+/// 0.0106 m), other sizes scale the spacing so the cube stays ~1 m.
+pub fn dam_break_scene(edge: usize, solver: PressureSolverKind) -> Scene {
+    dam_break_scene_with(edge, solver, &[])
 }
 
 /// [`dam_break_scene`] with further `--set` style overrides.
-pub fn dam_break_scene_with(n: usize, solver: PressureSolverKind, extra: &[String]) -> Scene {
+pub fn dam_break_scene_with(edge: usize, solver: PressureSolverKind, extra: &[String]) -> Scene {
     let text = include_str!("../scenes/bench_dam_break.toml");
-    let spacing = 0.0212 * 46.0 / n as Real;
-    let side = n as Real * spacing * (1.0 + 1e-9);
+    let spacing = 0.0212 * 46.0 / edge as Real;
+    let side = edge as Real * spacing * (1.0 + 1e-9);
     let solver = match solver {
         PressureSolverKind::Dfsph => "dfsph",
         PressureSolverKind::Iisph => "iisph",
@@ -104,25 +111,26 @@ pub fn advance(sph: &mut SphSolver, steps: u64) -> Result<(), RunError> {
     Ok(())
 }
 
-/// Times `steps` steps after `warmup` steps of one configuration.
+/// Times `steps` steps after `warmup` steps of one configuration ([`dam_break_scene`] with
+/// `edge` particles along the cube's side).
 pub fn measure(
-    n: usize,
+    edge: usize,
     solver: PressureSolverKind,
     warmup: u64,
     steps: u64,
 ) -> Result<BenchResult, RunError> {
-    measure_with(n, solver, &[], warmup, steps)
+    measure_with(edge, solver, &[], warmup, steps)
 }
 
 /// [`measure`] on the scene with further overrides (`extra`).
 pub fn measure_with(
-    n: usize,
+    edge: usize,
     solver: PressureSolverKind,
     extra: &[String],
     warmup: u64,
     steps: u64,
 ) -> Result<BenchResult, RunError> {
-    let scene = dam_break_scene_with(n, solver, extra);
+    let scene = dam_break_scene_with(edge, solver, extra);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
     advance(&mut sph, warmup)?;
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
@@ -202,7 +210,7 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
         "B/particle"
     );
     for &size in &args.sizes {
-        let n = (size as f64).cbrt().round().max(4.0) as usize;
+        let edge = cube_edge(size);
         for name in &args.solvers {
             let solver = match name.as_str() {
                 "dfsph" => PressureSolverKind::Dfsph,
@@ -213,7 +221,7 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
                     )))
                 }
             };
-            let r = measure(n, solver, args.warmup, args.steps)?;
+            let r = measure(edge, solver, args.warmup, args.steps)?;
             println!(
                 "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>10.1} {:>8.1} {:>10.1} {:>8.1} {:>12.3} {:>10.0}",
                 name,

@@ -13,7 +13,7 @@
 use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use super::mcvsph::sample_indices;
 use super::vrsph::{stream_function, stream_strength};
-use crate::bench::{advance, dam_break_scene, measure_with, BenchArgs};
+use crate::bench::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
 use crate::run::{bodies, RunError};
 use crate::scene::PressureSolverKind;
 use crate::sph::lanes::F4;
@@ -39,7 +39,6 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
             METHODS.join(", ")
         )));
     }
-    let cube = |size: usize| (size as f64).cbrt().round().max(4.0) as usize;
     if !args.refinements.is_empty() {
         println!(
             "\nRefinements on DFSPH at their paper defaults, same set-up, {} warm-up + {} timed \
@@ -51,16 +50,16 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
             "method", "fluid", "ms/step", "refine ms", "step ratio", "overhead"
         );
         for &size in &args.sizes {
-            let n = cube(size);
+            let edge = cube_edge(size);
             let dfsph = PressureSolverKind::Dfsph;
-            let base = measure_with(n, dfsph, &[], args.warmup, args.steps)?;
+            let base = measure_with(edge, dfsph, &[], args.warmup, args.steps)?;
             println!(
                 "{:<12} {:>9} {:>10.1} {:>10.1} {:>12.3} {:>13}",
                 "dfsph", base.fluid, base.ms_per_step, 0.0, 1.0, "-"
             );
             for m in &args.refinements {
                 let set = [format!("refinement.method=\"{m}\"")];
-                let r = measure_with(n, dfsph, &set, args.warmup, args.steps)?;
+                let r = measure_with(edge, dfsph, &set, args.warmup, args.steps)?;
                 println!(
                     "{:<12} {:>9} {:>10.1} {:>10.1} {:>12.3} {:>12.1}%",
                     m,
@@ -75,12 +74,12 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
     }
     if args.passes {
         for &size in &args.sizes {
-            vrsph_pass_table(cube(size), args.warmup, args.steps)?;
+            vrsph_pass_table(cube_edge(size), args.warmup, args.steps)?;
         }
     }
     if args.mcvsph_error {
-        let n = cube(args.sizes.iter().copied().min().unwrap_or(25_000));
-        mcvsph_error_table(n, args.warmup + args.steps)?;
+        let edge = cube_edge(args.sizes.iter().copied().min().unwrap_or(25_000));
+        mcvsph_error_table(edge, args.warmup + args.steps)?;
     }
     Ok(())
 }
@@ -90,8 +89,8 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
 /// spacing): relative RMS error over 5 seeds and time per estimate, for 0.1 % to 10 %, by the
 /// direct sum and by the treecode at its default opening parameter, with the tree's own error
 /// against the direct sum of the same sample (relative RMS).
-fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
-    let (sph, step_ms, _) = warmed_dam_break(n, 0, steps)?;
+fn mcvsph_error_table(edge: usize, steps: u64) -> Result<(), RunError> {
+    let (sph, step_ms, _) = warmed_dam_break(edge, 0, steps)?;
     let omega = sph.vorticity();
     let x = &sph.fluid.x;
     let beta: Vec<Vec3> = omega
@@ -151,14 +150,14 @@ fn mcvsph_error_table(n: usize, steps: u64) -> Result<(), RunError> {
     Ok(())
 }
 
-/// The dam break at n^3 fluid particles after `warmup` steps, its mean DFSPH step over
+/// The dam break at edge^3 fluid particles after `warmup` steps, its mean DFSPH step over
 /// `steps` more, in ms, and its kinematic viscosity.
 fn warmed_dam_break(
-    n: usize,
+    edge: usize,
     warmup: u64,
     steps: u64,
 ) -> Result<(SphSolver, Real, Real), RunError> {
-    let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
+    let scene = dam_break_scene(edge, PressureSolverKind::Dfsph);
     let mut sph = SphSolver::new(&scene, bodies(&scene)?);
     advance(&mut sph, warmup)?;
     let t0 = Instant::now();
@@ -202,12 +201,12 @@ fn floor_pass<const F: usize>(
     })
 }
 
-/// VRSPH's four neighbour passes (`super::vrsph`, in its order) on the dam break at n^3
+/// VRSPH's four neighbour passes (`super::vrsph`, in its order) on the dam break at edge^3
 /// particles, each against its floor, with DFSPH's density-rate pass and step for scale.
-fn vrsph_pass_table(n: usize, warmup: u64, steps: u64) -> Result<(), RunError> {
-    let (sph, step_ms, nu) = warmed_dam_break(n, warmup, steps)?;
+fn vrsph_pass_table(edge: usize, warmup: u64, steps: u64) -> Result<(), RunError> {
+    let (sph, step_ms, nu) = warmed_dam_break(edge, warmup, steps)?;
     let volume = volumes(sph.fluid.mass, &sph.fluid.density);
-    let scene = dam_break_scene(n, PressureSolverKind::Dfsph);
+    let scene = dam_break_scene(edge, PressureSolverKind::Dfsph);
     let ops = Operators {
         nb: sph.neighborhood(),
         volume: &volume,

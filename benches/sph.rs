@@ -1,7 +1,7 @@
 //! `cargo bench --bench sph`: the SPH step-time benchmark at the 25k and 100k sizes (the same
 //! measurement as `eddy bench`, which also takes other sizes and solvers).
 
-fn main() -> Result<(), eddy::run::RunError> {
+fn main() -> Result<(), eddy::pipeline::RunError> {
     eddy::bench::run(&eddy::bench::BenchArgs {
         sizes: vec![25_000, 100_000],
         solvers: vec!["dfsph".into(), "iisph".into()],

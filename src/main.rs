@@ -2,8 +2,7 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use eddy::run::{self, RunOptions};
-use eddy::scene::plan::Plan;
+use eddy::pipeline::{self as run, Pipeline, Plan, RunOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -43,7 +42,7 @@ enum Command {
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(eddy::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
-    BenchGrid(eddy::grid::bench::GridBenchArgs),
+    BenchGrid(eddy::bench::grid::GridBenchArgs),
     /// Plot energy and vorticity against time for several runs into one PNG.
     Compare {
         /// Run output folders (each with a metrics.csv).
@@ -81,10 +80,13 @@ fn main() -> anyhow::Result<()> {
                 until,
                 steps,
                 progress: std::io::stderr().is_terminal(),
+                trace: false,
             };
             let resolved = run::resolve(&scene, &options)?;
             if plan {
-                print!("{}", Plan::of(&resolved));
+                let built = Pipeline::build(&resolved)
+                    .with_context(|| format!("building {}", scene.display()))?;
+                print!("{}", Plan::of(&built));
                 return Ok(());
             }
             eprintln!(
@@ -94,10 +96,10 @@ fn main() -> anyhow::Result<()> {
             );
             let s = run::run_scene(&resolved, &options)
                 .with_context(|| format!("running {}", scene.display()))?;
-            let (count, what) = if s.grid_cells > 0 {
-                (s.grid_cells, "cells")
-            } else {
+            let (count, what) = if s.fluid_particles > 0 {
                 (s.fluid_particles, "fluid particles")
+            } else {
+                (s.grid_cells, "cells")
             };
             eprintln!(
                 "eddy: {} steps to t = {:.4} s in {:.1} s ({count} {what}, {} boundary particles, \
@@ -112,7 +114,7 @@ fn main() -> anyhow::Result<()> {
             );
         }
         Command::Bench(args) => eddy::bench::run(&args)?,
-        Command::BenchGrid(args) => eddy::grid::bench::run(&args)?,
+        Command::BenchGrid(args) => eddy::bench::grid::run(&args)?,
         Command::Compare { runs, out } => {
             let series = runs
                 .iter()

@@ -1,8 +1,34 @@
-//! Landing a run on its end time without a tiny last step: a step far shorter than its
-//! neighbours upsets solvers that correct an error within one step (DFSPH's density solve turns
+//! The shared clock's rules: the step-size limits every solver takes from the scene's `[time]`,
+//! and landing a run on its end time without a tiny last step (a step far shorter than its
+//! neighbours upsets solvers that correct an error within one step: DFSPH's density solve turns
 //! the same compression into a velocity kick proportional to 1/dt).
 
 use crate::Real;
+
+/// How a solver bounds its step: a CFL factor between `dt_min` and `dt_max`, or a fixed step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepLimits {
+    /// CFL factor: dt = cfl * spacing / max speed.
+    pub cfl: Real,
+    /// Smallest allowed step, s; a state that needs a smaller one is unstable.
+    pub dt_min: Real,
+    /// Largest allowed step, s.
+    pub dt_max: Real,
+    /// A fixed step, s, instead of the CFL rule.
+    pub fixed_dt: Option<Real>,
+}
+
+impl Default for StepLimits {
+    /// The scene file's defaults (`[time]`).
+    fn default() -> Self {
+        Self {
+            cfl: 0.4,
+            dt_min: 1e-6,
+            dt_max: 5e-3,
+            fixed_dt: None,
+        }
+    }
+}
 
 /// The step to take when `remaining` time is left and the solver would take `dt`: `dt` while
 /// at least two steps remain; over the last two, halves of what remains; at the end, the rest.

@@ -2,9 +2,10 @@
 //! incompressibility with obstacles and open sides, solid boundary conditions, Taylor–Green
 //! decay and its convergence order, scalar advection in a rotating field, bad input.
 
-use eddy::grid::bench::TaylorGreen;
+use eddy::bench::grid::TaylorGreen;
 use eddy::grid::{advect::advect, GridError, GridSolver, MacGrid};
-use eddy::run::{bodies, RunError, RunOptions};
+use eddy::pipeline::{grid_solver, RunError, RunOptions};
+use eddy::scene::build::{bodies, grid_params};
 use eddy::scene::{self, Advection, Scene};
 use eddy::{Real, Vec3};
 use std::f64::consts::PI;
@@ -103,7 +104,7 @@ fn projection_is_divergence_free_with_obstacles_and_open_sides() {
         motion = { linear = [0.0, 0.3, 0.0] }
         "#,
     );
-    let mut g = GridSolver::new(&s, bodies(&s).expect("bodies")).expect("grid builds");
+    let mut g = grid_solver(&s).expect("grid builds");
     g.set_velocity(|x| {
         Vec3::new(
             1.0 + 0.3 * (3.0 * x.y).sin(),
@@ -113,7 +114,7 @@ fn projection_is_divergence_free_with_obstacles_and_open_sides() {
     })
     .expect("projects");
     for _ in 0..3 {
-        g.advance(None).expect("stable");
+        g.step(None).expect("stable");
         let umax = g.mac.max_face_speed();
         let div = eddy::grid::project::max_divergence(&g.mac, &g.bounds.fluid_mask());
         assert!(
@@ -245,7 +246,7 @@ fn bad_grid_input_is_reported() {
         rotation: [0.0; 3],
         motion: Default::default(),
     });
-    match GridSolver::new(&s, bodies(&s).expect("bodies")) {
+    match GridSolver::new(&grid_params(&s).expect("a grid"), bodies(&s).expect("bodies")) {
         Err(e @ GridError::NoFluid { .. }) => {
             let msg = e.to_string();
             assert!(
@@ -255,7 +256,7 @@ fn bad_grid_input_is_reported() {
         }
         other => panic!("expected NoFluid, got {:?}", other.err()),
     }
-    let run = eddy::run::run_scene(
+    let run = eddy::pipeline::run_scene(
         &s,
         &RunOptions {
             out: Some(std::env::temp_dir().join("eddy_bad_grid")),
@@ -292,7 +293,7 @@ fn lid_driven_cavity_reaches_ghia_steady_state() {
         overrides: vec!["output.vtk=false".into()],
         ..Default::default()
     };
-    let summary = eddy::run::run(&path, &options).expect("cavity runs");
+    let summary = eddy::pipeline::run(&path, &options).expect("cavity runs");
     let rates = column(&out.path().join("metrics.csv"), "change_rate");
     let last = *rates.last().expect("steps");
     assert!(last < 1e-6, "not steady: change rate {last:.3e}/s");
@@ -382,7 +383,7 @@ fn velocity_is_extrapolated_into_static_obstacles_and_restored() {
         position = [0.5, 0.5, 0.5]
         "#,
     );
-    let mut g = GridSolver::new(&s, bodies(&s).expect("bodies")).expect("grid builds");
+    let mut g = grid_solver(&s).expect("grid builds");
     for u in g.mac.u.iter_mut() {
         u.fill(2.0);
     }
@@ -421,9 +422,9 @@ fn gravity_is_balanced_by_hydrostatic_pressure() {
         position = [0.5, 0.5, 0.25]
         "#,
     );
-    let mut g = GridSolver::new(&s, bodies(&s).expect("bodies")).expect("grid builds");
+    let mut g = grid_solver(&s).expect("grid builds");
     for _ in 0..3 {
-        g.advance(None).expect("stable");
+        g.step(None).expect("stable");
     }
     assert!(
         g.mac.max_face_speed() < 1e-9,
@@ -454,12 +455,12 @@ fn vorticity_confinement_adds_energy_to_vortices() {
             l = 2.0 * PI,
             dz = 2.0 * PI / 32.0,
         );
-        let mut g = GridSolver::new(&scene_from(&text), vec![]).expect("grid builds");
+        let mut g = grid_solver(&scene_from(&text)).expect("grid builds");
         g.set_velocity(|x| Vec3::new(x.x.sin() * x.y.cos(), -x.x.cos() * x.y.sin(), 0.0))
             .expect("projects");
         let e0 = g.kinetic_energy();
         for _ in 0..20 {
-            g.advance(None).expect("stable");
+            g.step(None).expect("stable");
         }
         g.kinetic_energy() / e0
     };

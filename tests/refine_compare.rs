@@ -2,7 +2,7 @@
 //! tank.
 
 use eddy::io::plot::{compare, RunSeries};
-use eddy::run::{run, RunOptions};
+use eddy::pipeline::{run, RunOptions};
 use std::path::Path;
 
 /// Two short runs write the new columns consistently (total = linear + rotational + potential

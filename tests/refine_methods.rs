@@ -3,7 +3,7 @@
 //! parameters give clear errors.
 
 use eddy::refine::{self, StepContext};
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene::{self, Refinement, Scene};
 use eddy::sph::operators::{volumes, Operators, WallField};
 use eddy::sph::SphSolver;
@@ -22,7 +22,7 @@ fn scene_text(refinement: &str) -> String {
 }
 
 fn solver(scene: &Scene) -> SphSolver {
-    SphSolver::new(scene, bodies(scene).expect("bodies"))
+    sph_solver(scene).expect("solver builds")
 }
 
 /// A Gaussian vortex about the z axis through the block's centre: v = (w0 / 2) exp(-r^2 /
@@ -187,6 +187,6 @@ fn bad_refinement_parameters_give_clear_errors() {
     ] {
         let s = scene::parse_str(&scene_text(text), file, &[]).expect("valid");
         assert_eq!(s.refinement, expected);
-        s.refinement.validate(file).expect("defaults are valid");
+        s.refinement.validate().expect("defaults are valid");
     }
 }

@@ -4,7 +4,7 @@
 
 use eddy::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use eddy::refine::{mcvsph, rankine, vrsph};
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene::{self, Scene};
 use eddy::sph::lanes::F4;
 use eddy::sph::neighbors::cell_order;
@@ -36,7 +36,7 @@ fn block(container: bool, refinement: &str) -> Scene {
 }
 
 fn solver(scene: &Scene) -> SphSolver {
-    SphSolver::new(scene, bodies(scene).expect("bodies"))
+    sph_solver(scene).expect("solver builds")
 }
 
 /// Particles at least `margin` inside every face of the block [0, 0.32]^3.
@@ -191,8 +191,7 @@ fn packed_operators_equal_the_f64_ones() {
     let scene = block(true, "method = \"none\"");
     let mut s = solver(&scene);
     for _ in 0..40 {
-        s.advance().expect("stable");
-        s.update_neighborhoods();
+        s.step(scene.time.end).expect("stable");
     }
     let vol = volumes(s.fluid.mass, &s.fluid.density);
     for walls in [false, true] {

@@ -7,9 +7,8 @@
 //! round differently from run to run) and several runs share the cores.
 
 use eddy::metrics;
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene;
-use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
 use std::path::Path;
 
@@ -31,11 +30,10 @@ fn run(overrides: &[String], steps: u64) -> Result<Trace, String> {
     pool.install(|| {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/refine_sloshing.toml");
         let scene = scene::load(&file, overrides).map_err(|e| e.to_string())?;
-        let mut s = SphSolver::new(&scene, bodies(&scene).map_err(|e| e.to_string())?);
+        let mut s = sph_solver(&scene).map_err(|e| e.to_string())?;
         let mut kinetic = Vec::new();
         for step in 0..steps {
-            s.advance().map_err(|e| format!("{overrides:?}: {e}"))?;
-            s.update_neighborhoods();
+            s.step(scene.time.end).map_err(|e| format!("{overrides:?}: {e}"))?;
             kinetic.push(metrics::kinetic_energy(s.fluid.mass, &s.fluid.v));
             if step % 50 == 0 || step + 1 == steps {
                 let tank = [0.5, 0.4, 0.1];

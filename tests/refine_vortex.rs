@@ -4,9 +4,8 @@
 //! lost, so its kinetic energy must decay more slowly than DFSPH's.
 
 use eddy::metrics;
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene;
-use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
 use std::path::Path;
 
@@ -26,7 +25,7 @@ fn decay(refinement: &str, nu: Real, steps: usize) -> (Real, Real) {
          metrics = []\n[refinement]\n{refinement}\n"
     );
     let scene = scene::parse_str(&text, Path::new("vortex.toml"), &[]).expect("scene");
-    let mut s = SphSolver::new(&scene, bodies(&scene).expect("bodies"));
+    let mut s = sph_solver(&scene).expect("solver builds");
     let centre = Vec3::new(0.5 * SIDE, 0.5 * SIDE, 0.0);
     let core = 3.0 * SPACING;
     let circulation = 0.3 * 2.0 * std::f64::consts::PI * core / 0.638;
@@ -43,8 +42,7 @@ fn decay(refinement: &str, nu: Real, steps: usize) -> (Real, Real) {
     }
     let initial = metrics::kinetic_energy(s.fluid.mass, &s.fluid.v);
     for _ in 0..steps {
-        s.advance().expect("stable");
-        s.update_neighborhoods();
+        s.step(scene.time.end).expect("stable");
     }
     (initial, metrics::kinetic_energy(s.fluid.mass, &s.fluid.v))
 }

@@ -2,7 +2,7 @@
 //! solvers' tolerances, and the dam break's front and energy.
 
 use eddy::metrics::{self, probes};
-use eddy::run::{bodies, RunOptions};
+use eddy::pipeline::{sph_solver, RunOptions};
 use eddy::scene::{self, Scene};
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
@@ -18,7 +18,7 @@ fn scene(file: &str, overrides: &[&str]) -> Scene {
 }
 
 fn solver(scene: &Scene) -> SphSolver {
-    SphSolver::new(scene, bodies(scene).expect("bodies build"))
+    sph_solver(scene).expect("solver builds")
 }
 
 const G: Real = 9.81;
@@ -36,8 +36,7 @@ fn hydrostatic_tank_settles_to_rho_g_gradient() {
     let mut early_ke = 0.0;
     let mut late_ke = 0.0;
     while s.time() < 1.6 {
-        s.advance().expect("stable");
-        s.update_neighborhoods();
+        s.step(scene.time.end).expect("stable");
         let ke = metrics::kinetic_energy(s.fluid.mass, &s.fluid.v);
         if (0.3..0.5).contains(&s.time()) {
             early_ke = Real::max(early_ke, ke);
@@ -101,8 +100,7 @@ fn dfsph_solvers_meet_their_tolerances_in_the_dam_break() {
     let mut s = solver(&scene);
     let mut steps = 0;
     while s.time() < 0.5 {
-        let stats = s.advance().expect("stable");
-        s.update_neighborhoods();
+        let stats = s.step(scene.time.end).expect("stable");
         if stats.pressure.iterations < p.max_iterations {
             assert!(stats.pressure.error <= p.density_tolerance, "{stats:?}");
         }
@@ -149,8 +147,7 @@ fn dam_break_front_and_energy() {
     let mut front = probes::front(&s.fluid.x, 0, 0.0);
     let mut history = vec![(0.0, front)];
     while s.time() < 0.8 {
-        s.advance().expect("stable");
-        s.update_neighborhoods();
+        s.step(scene.time.end).expect("stable");
         let e = energy(&s);
         assert!(
             e <= last_e + 1e-6 * e0,
@@ -189,8 +186,7 @@ fn iisph_keeps_the_tank_incompressible() {
     let mut s = solver(&scene);
     let (mut sum, mut steps) = (0.0, 0);
     while s.time() < 0.6 {
-        let stats = s.advance().expect("stable");
-        s.update_neighborhoods();
+        let stats = s.step(scene.time.end).expect("stable");
         if s.time() > 0.3 {
             assert!(stats.pressure.error <= tolerance);
             assert!(s.fluid.x.iter().all(|x| x.y > 0.0 && x.y < 0.6));
@@ -220,7 +216,7 @@ fn run_writes_outputs() {
         ..RunOptions::default()
     };
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let summary = eddy::run::run(&path, &options).expect("runs");
+    let summary = eddy::pipeline::run(&path, &options).expect("runs");
     assert_eq!(summary.steps, 5);
     for f in [
         "scene.toml",
@@ -248,7 +244,7 @@ fn run_lands_on_its_end_time() {
         ..RunOptions::default()
     };
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let summary = eddy::run::run(&path, &options).expect("runs");
+    let summary = eddy::pipeline::run(&path, &options).expect("runs");
     assert!(
         (summary.time - 0.0123).abs() < 1e-12,
         "ended at {}",
@@ -264,8 +260,7 @@ fn cached_pair_gradients_match_the_kernel() {
     let scene = scene("scenes/hydrostatic_tank.toml", &[]);
     let mut s = solver(&scene);
     for _ in 0..3 {
-        s.advance().expect("stable");
-        s.update_neighborhoods();
+        s.step(scene.time.end).expect("stable");
     }
     let nb = s.neighborhood();
     let k = nb.kernel;

@@ -3,9 +3,8 @@
 //! co-rotating particles in the field they synthesize.
 
 use eddy::grid::MacGrid;
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene;
-use eddy::sph::SphSolver;
 use eddy::vortex::dynamics::{advect, dissipate, merge, split, stretch};
 use eddy::vortex::{kernel, synthesize, DynamicsSettings, VortexParticles};
 use eddy::{Real, Vec3};
@@ -143,7 +142,7 @@ fn a_particle_in_uniform_flow_moves_with_the_flow_on_grid_and_sph() {
         [time]\nsteps = 1\n[fluid]\nspacing = 0.02\n[[fluid.blocks]]\nmin = [0.0, 0.0, 0.0]\n\
         max = [0.32, 0.32, 0.32]\nvelocity = [0.3, -0.2, 0.1]\n[output]\nvtk = false\nmetrics = []\n";
     let scene = scene::parse_str(text, Path::new("u.toml"), &[]).expect("scene");
-    let s = SphSolver::new(&scene, bodies(&scene).expect("bodies"));
+    let s = sph_solver(&scene).expect("solver builds");
     let mut p = particles(&[(Vec3::new(0.16, 0.15, 0.17), Vec3::z(), 0.05)]);
     advect(&mut p, &s.velocity_source(), 0.1);
     assert!((p.x[0] - Vec3::new(0.19, 0.13, 0.18)).norm() < 1e-12);
@@ -202,7 +201,7 @@ fn sph_source_gradient_of_a_linear_flow_is_its_matrix() {
         [time]\nsteps = 1\n[fluid]\nspacing = 0.02\n[[fluid.blocks]]\nmin = [0.0, 0.0, 0.0]\n\
         max = [0.32, 0.32, 0.32]\n[output]\nvtk = false\nmetrics = []\n";
     let scene = scene::parse_str(text, Path::new("g.toml"), &[]).expect("scene");
-    let mut s = SphSolver::new(&scene, bodies(&scene).expect("bodies"));
+    let mut s = sph_solver(&scene).expect("solver builds");
     let a = Mat3::new(0.4, -1.1, 0.3, 0.8, 0.2, -0.6, -0.5, 0.9, -0.6);
     let offset = Vec3::new(0.2, -0.1, 0.05);
     for (v, x) in s.fluid.v.iter_mut().zip(&s.fluid.x) {

@@ -4,9 +4,8 @@
 
 use eddy::grid::forces::vorticity;
 use eddy::grid::MacGrid;
-use eddy::run::bodies;
+use eddy::pipeline::sph_solver;
 use eddy::scene;
-use eddy::sph::SphSolver;
 use eddy::vortex::{kernel, synthesize, VortexParticles};
 use eddy::{Real, Vec3};
 use std::path::Path;
@@ -125,7 +124,7 @@ fn point_and_grid_synthesis_agree_where_points_and_faces_coincide() {
         max = [0.4, 0.4, 0.4]\n[output]\nvtk = false\nmetrics = []\n"
     );
     let scene = scene::parse_str(&text, Path::new("pts.toml"), &[]).expect("scene");
-    let mut s = SphSolver::new(&scene, bodies(&scene).expect("bodies"));
+    let mut s = sph_solver(&scene).expect("solver builds");
     let mut p = VortexParticles::new();
     for (x, w) in [
         (Vec3::new(0.1713, 0.2027, 0.2091), Vec3::new(1.0, -2.0, 0.5)),

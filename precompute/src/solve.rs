@@ -2,12 +2,13 @@
 //! MAC-grid solver with raised viscosity, average the flow, and evaluate
 //! `omega_pre = beta (U(x + l n) x n)` at every boundary point.
 
-use std::path::Path;
-
-use anyhow::{bail, Context};
+use anyhow::bail;
 use eddy::abl::MotionKind;
-use eddy::grid::GridSolver;
-use eddy::scene::{GridBoundary, GridSide, Scene, ViscosityScheme};
+use eddy::geometry::Body;
+use eddy::grid::params::PRESSURE_MAX_ITERATIONS;
+use eddy::grid::poisson::SolverSettings;
+use eddy::grid::{GridParams, GridSide, GridSolver, ViscosityScheme};
+use eddy::stepping::StepLimits;
 use eddy::{Point3, Real, Vec3};
 
 use crate::spec::ObstacleSpec;
@@ -29,7 +30,7 @@ impl Surface {
     }
 }
 
-/// The grid scene of one direction. Translation: the object is fixed and the free stream
+/// The grid of one direction and the obstacle in it. Translation: the object is fixed and the free stream
 /// `-direction` (the object moving along `direction` through still fluid) is prescribed on every
 /// side of the box. The boundary conditions are then linear in the direction, so omega_pre is a
 /// smooth function of it; with open outflow sides (inflow where the stream enters, zero pressure
@@ -40,7 +41,11 @@ impl Surface {
 /// the object spins at 1 rad/s about `direction`, and every side is open (zero pressure), so the
 /// pumping of a spinning body leaves and enters as it would in unbounded fluid, rather than
 /// being spun up or down by walls.
-pub fn scene(spec: &ObstacleSpec, kind: MotionKind, direction: &Vec3) -> anyhow::Result<Scene> {
+pub fn grid(
+    spec: &ObstacleSpec,
+    kind: MotionKind,
+    direction: &Vec3,
+) -> anyhow::Result<(GridParams, Body)> {
     let h = spec.half_side()?;
     let g = &spec.grid;
     let dx = spec.spacing()?;
@@ -49,57 +54,39 @@ pub fn scene(spec: &ObstacleSpec, kind: MotionKind, direction: &Vec3) -> anyhow:
         MotionKind::Rotation => reach(spec)?,
     };
     let dt = g.cfl * dx / speed;
-    let text = format!(
-        r#"
-        name = "abl_precompute"
-        gravity = [0.0, 0.0, 0.0]
-        domain = {{ min = [{m:?}, {m:?}, {m:?}], max = [{h:?}, {h:?}, {h:?}] }}
-        time = {{ steps = 1, dt = {dt:?}, dt_max = {dt:?}, dt_min = {dt_min:?} }}
-        viscosity = {{ kinematic = {nu:?} }}
-        [grid]
-        resolution = [{n}, {n}, {n}]
-        pressure_tolerance = {tol:?}
-        "#,
-        m = -h,
-        dt_min = dt * 1e-3,
-        nu = g.viscosity,
-        n = g.resolution,
-        tol = g.stabilise_tolerance,
-    );
-    let mut scene = eddy::scene::parse_str(&text, Path::new("precompute.toml"), &[])
-        .context("building the precomputation scene")?;
     let flow = -direction;
-    let grid = scene.grid.as_mut().context("the scene has a grid")?;
-    grid.advection = g.advection;
-    grid.viscosity_scheme = ViscosityScheme::BackwardEuler;
-    let angular = match kind {
-        MotionKind::Translation => {
-            grid.initial_velocity = flow.into();
-            let side = GridSide::Inflow(flow.into());
-            grid.boundary = GridBoundary {
-                x_min: side,
-                x_max: side,
-                y_min: side,
-                y_max: side,
-                z_min: side,
-                z_max: side,
-            };
-            [0.0; 3]
-        }
-        MotionKind::Rotation => {
-            grid.boundary = GridBoundary {
-                x_min: GridSide::Open,
-                x_max: GridSide::Open,
-                y_min: GridSide::Open,
-                y_max: GridSide::Open,
-                z_min: GridSide::Open,
-                z_max: GridSide::Open,
-            };
-            (*direction).into()
-        }
+    let (side, initial_velocity, angular) = match kind {
+        MotionKind::Translation => (GridSide::Inflow(flow.into()), flow, [0.0; 3]),
+        MotionKind::Rotation => (GridSide::Open, Vec3::zeros(), (*direction).into()),
     };
-    scene.obstacles = vec![spec.body_entry(angular)];
-    Ok(scene)
+    let params = GridParams {
+        resolution: [g.resolution; 3],
+        dx,
+        origin: Vec3::repeat(-h),
+        initial_velocity,
+        sides: [[side; 2]; 3],
+        advection: g.advection,
+        reflection: false,
+        viscosity_scheme: ViscosityScheme::BackwardEuler,
+        viscosity: g.viscosity,
+        density: 1.0,
+        confinement: 0.0,
+        gravity: Vec3::zeros(),
+        gravity_force: false,
+        limits: StepLimits {
+            fixed_dt: Some(dt),
+            dt_max: dt,
+            dt_min: dt * 1e-3,
+            ..StepLimits::default()
+        },
+        pressure: SolverSettings {
+            tolerance: g.stabilise_tolerance,
+            max_iterations: PRESSURE_MAX_ITERATIONS,
+        },
+        smoke: None,
+        average_from: None,
+    };
+    Ok((params, spec.body_entry(angular)))
 }
 
 /// Largest distance of the object's bounding box from its origin: the fastest wall speed at
@@ -123,9 +110,9 @@ pub fn solve(
     kind: MotionKind,
     direction: &Vec3,
 ) -> anyhow::Result<Vec<Vec3>> {
-    let scene = scene(spec, kind, direction)?;
-    let body = eddy::geometry::RigidBody::from_scene(&scene.obstacles[0], 0)?;
-    let mut solver = GridSolver::new(&scene, vec![body])?;
+    let (params, body) = grid(spec, kind, direction)?;
+    let body = eddy::geometry::RigidBody::from_scene(&body, 0)?;
+    let mut solver = GridSolver::new(&params, vec![body])?;
     let cells = spec.grid.resolution.pow(3);
     if solver.bounds.fluid_cells() == cells {
         bail!(
@@ -142,7 +129,7 @@ pub fn solve(
         solver.set_velocity(|_| flow)?;
     }
     for _ in 0..spec.grid.stabilise_steps {
-        solver.advance(None)?;
+        solver.step(None)?;
     }
     // The scene's solves ran at the stabilising tolerance; the averaged flow gets the tight one.
     solver.set_solver_tolerance(spec.grid.tolerance);
@@ -156,7 +143,7 @@ pub fn solve(
     let mut sum = vec![Vec3::zeros(); outside.len()];
     let mut time = 0.0;
     for _ in 0..spec.grid.average_steps {
-        let dt = solver.advance(None)?.dt;
+        let dt = solver.step(None)?.dt;
         let body = &solver.bodies[0];
         let t = solver.time();
         let pose = body.pose(t);

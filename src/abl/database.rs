@@ -8,7 +8,7 @@ use nalgebra::Isometry3;
 use rayon::prelude::*;
 
 use super::{geometry_fingerprint, AblData, AblError, AblHeader, MotionKind, Sampling};
-use crate::scene::Shape;
+use crate::geometry::Shape;
 use crate::{Point3, Real, Vec3};
 
 /// Points per parallel task of a lookup: large enough that a task outweighs its scheduling.

@@ -4,7 +4,7 @@
 use sha2::{Digest, Sha256};
 
 use super::AblError;
-use crate::scene::Shape;
+use crate::geometry::Shape;
 
 /// Lower-case hex SHA-256 of the concatenated `parts`, each prefixed by its length so that
 /// `["ab", "c"]` and `["a", "bc"]` differ.

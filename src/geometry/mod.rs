@@ -6,6 +6,7 @@
 mod mesh;
 mod motion;
 mod sampling;
+mod spec;
 
 use std::path::PathBuf;
 
@@ -13,9 +14,9 @@ use nalgebra::Isometry3;
 use parry3d_f64::math::Vector as GVec;
 use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, Shape as ParryShape, TriMesh};
 
-use crate::scene::{Body, Shape};
 use crate::{Point3, Real, Vec3};
 use motion::Kinematics;
+pub use spec::{Body, Keyframe, Motion, Shape};
 
 /// Why a body could not be built from its scene entry. Every message names the body, and the
 /// file where there is one.

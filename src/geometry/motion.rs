@@ -6,7 +6,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
-use crate::scene::Motion;
+use super::spec::Motion;
 use crate::{Real, Vec3};
 
 /// An orientation.

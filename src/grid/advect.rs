@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::interp::{standard, Stagger};
 use super::mac::{MacGrid, MacView};
-use crate::scene::Advection;
+use super::params::Advection;
 use crate::Real;
 
 /// `field` (laid out as `stagger`) carried by `vel` over `dt`.

@@ -10,7 +10,7 @@ use super::diffusion::{DiffusionBoundary, DiffusionSide};
 use super::mac::{cells_beside_face, MacGrid};
 use super::poisson::{Boundary, CellKind, Side};
 use crate::geometry::RigidBody;
-use crate::scene::GridSide;
+use super::params::GridSide;
 use crate::{Point3, Real, Vec3};
 
 /// Owner value of a cell no obstacle covers.

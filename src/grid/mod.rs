@@ -1,11 +1,10 @@
 //! The MAC-grid fluid: staggered velocities on cubic cells, semi-Lagrangian and MacCormack
 //! advection, implicit viscosity, MGPCG pressure projection with walls, obstacles, inflow,
-//! open and periodic sides, smoke with buoyancy, vorticity confinement, running averages and
-//! probes (Pfaff et al. 2009, sections 1 and 5; the precomputation runs it with raised viscosity).
+//! open and periodic sides, smoke with buoyancy, vorticity confinement and running averages
+//! (Pfaff et al. 2009, sections 1 and 5; the precomputation runs it with raised viscosity).
 
 pub mod advect;
 pub mod average;
-pub mod bench;
 pub mod boundary;
 mod components;
 pub mod diffusion;
@@ -13,10 +12,10 @@ pub mod forces;
 pub mod interp;
 mod layout;
 pub mod mac;
+pub mod params;
 mod multigrid;
 mod pcg;
 pub mod poisson;
-pub mod probes;
 pub mod project;
 pub mod solver;
 mod stencil;
@@ -29,6 +28,7 @@ pub use boundary::Boundaries;
 pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, DiffusionSystem};
 pub use interp::Stagger;
 pub use mac::MacGrid;
+pub use params::{Advection, GridBoundary, GridParams, GridSide, Smoke, SmokeSource, ViscosityScheme};
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,
 };

@@ -55,7 +55,7 @@ impl Boundary {
 }
 
 /// When to stop iterating.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverSettings {
     /// Relative residual `|b - A x| / |b|` to reach.
     pub tolerance: Real,

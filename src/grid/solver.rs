@@ -12,12 +12,14 @@ use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, buoyancy, confinement};
 use super::mac::MacGrid;
-use super::poisson::{CellKind, PoissonSystem, SolveError, SolverSettings};
+use super::poisson::{CellKind, PoissonSystem, SolveError};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::parallel::BLOCK;
-use crate::scene::{Advection, Body, Grid, Motion, Scene, SmokeSource, ViscosityScheme};
+use super::params::{Advection, GridParams, Smoke, SmokeSource};
+use crate::geometry::{Body, Motion};
+use crate::stepping::towards_end;
 use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
@@ -31,8 +33,6 @@ const CFL_BLOWUP: Real = 50.0;
 /// Why the grid solver could not be built or could not go on.
 #[derive(Debug, thiserror::Error)]
 pub enum GridError {
-    #[error("scene has no [grid] section")]
-    NoGrid,
     #[error(transparent)]
     Geometry(#[from] GeometryError),
     #[error(
@@ -71,25 +71,6 @@ pub struct GridStepStats {
     pub advect_seconds: f64,
     pub project_seconds: f64,
     pub total_seconds: f64,
-}
-
-/// The settings a step reads, taken from the scene once.
-#[derive(Debug, Clone)]
-struct Settings {
-    advection: Advection,
-    reflection: bool,
-    viscosity: Real,
-    viscosity_scheme: ViscosityScheme,
-    density: Real,
-    confinement: Real,
-    up: Vec3,
-    /// Gravity applied as a body force (None: only its direction is used, for buoyancy).
-    gravity: Option<Vec3>,
-    cfl: Real,
-    dt_min: Real,
-    dt_max: Real,
-    fixed_dt: Option<Real>,
-    pressure: SolverSettings,
 }
 
 /// Smoke density, temperature and their sources.
@@ -132,21 +113,25 @@ pub struct GridSolver {
     advected: [Array3<Real>; 3],
     /// The velocity at the start of a step, for [`GridStepStats::change_rate`].
     before: [Array3<Real>; 3],
-    settings: Settings,
+    params: GridParams,
+    /// Against gravity (y without gravity): the direction smoke rises.
+    up: Vec3,
+    /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
+    /// them).
+    ran: Vec<&'static str>,
     time: Real,
     step: u64,
 }
 
 impl GridSolver {
-    /// Builds the grid of `scene` with its obstacles `bodies`, at rest or at the initial velocity.
-    pub fn new(scene: &Scene, bodies: Vec<RigidBody>) -> Result<Self, GridError> {
-        let grid = scene.grid.as_ref().ok_or(GridError::NoGrid)?;
-        let dx = grid.spacing(scene);
-        let sides = grid.boundary.sides();
-        let periodic = sides.map(|p| p[0] == crate::scene::GridSide::Periodic);
-        let mut mac = MacGrid::new(grid.resolution, dx, Vec3::from(scene.domain.min), periodic);
+    /// Builds the grid of `params` with its obstacles `bodies`, at rest or at the initial
+    /// velocity.
+    pub fn new(params: &GridParams, bodies: Vec<RigidBody>) -> Result<Self, GridError> {
+        let sides = params.sides;
+        let periodic = sides.map(|p| p[0] == super::params::GridSide::Periodic);
+        let mut mac = MacGrid::new(params.resolution, params.dx, params.origin, periodic);
         for (a, u) in mac.u.iter_mut().enumerate() {
-            u.fill(grid.initial_velocity[a]);
+            u.fill(params.initial_velocity[a]);
         }
         let bounds = Boundaries::new(&mac, sides, &bodies, 0.0);
         if bounds.fluid_cells() == 0 {
@@ -154,42 +139,18 @@ impl GridSolver {
                 .first()
                 .map(|b| b.name().to_owned())
                 .unwrap_or_default();
-            let domain = std::array::from_fn(|a| scene.domain.max[a] - scene.domain.min[a]);
+            let domain = std::array::from_fn(|a| params.resolution[a] as Real * params.dx);
             return Err(GridError::NoFluid { body, domain });
         }
         bounds.apply(&mut mac);
-        let g = Vec3::from(scene.gravity);
-        let up = if g.norm() > 0.0 {
-            -g.normalize()
-        } else {
-            Vec3::y()
-        };
-        let settings = Settings {
-            advection: grid.advection,
-            reflection: grid.reflection,
-            viscosity_scheme: grid.viscosity_scheme,
-            viscosity: scene.viscosity.kinematic,
-            density: grid.density,
-            confinement: grid.vorticity_confinement,
-            gravity: grid.gravity.then_some(g),
-            up,
-            cfl: scene.time.cfl,
-            dt_min: scene.time.dt_min,
-            dt_max: scene.time.dt_max,
-            fixed_dt: scene.time.dt,
-            pressure: SolverSettings {
-                tolerance: grid.pressure_tolerance,
-                max_iterations: grid.pressure_max_iterations as usize,
-            },
-        };
-        let smoke = grid
+        let smoke = params
             .smoke
             .as_ref()
-            .map(|s| smoke_state(&mac, grid, s))
+            .map(|s| smoke_state(&mac, s))
             .transpose()?;
         let system_cells = bounds.cell_kinds();
         let system = PoissonSystem::new(&system_cells, bounds.pressure_boundary());
-        let average = grid
+        let average = params
             .average_from
             .map(|start| (start, RunningAverage::new(&mac)));
         Ok(Self {
@@ -205,10 +166,17 @@ impl GridSolver {
             system,
             system_cells,
             diffusion: Default::default(),
-            settings,
+            up: up_of(params.gravity),
+            ran: Vec::new(),
+            params: params.clone(),
             time: 0.0,
             step: 0,
         })
+    }
+
+    /// The parameters the solver was built from (with the solver tolerance as last set).
+    pub fn params(&self) -> &GridParams {
+        &self.params
     }
 
     /// Simulated time, s.
@@ -240,13 +208,20 @@ impl GridSolver {
     /// (the scene's `grid.pressure_tolerance` until then): a run can stabilise at a loose
     /// tolerance and measure at a tight one.
     pub fn set_solver_tolerance(&mut self, tolerance: Real) {
-        self.settings.pressure.tolerance = tolerance;
+        self.params.pressure.tolerance = tolerance;
     }
 
-    /// Advances one step.
-    pub fn advance(&mut self, dt_limit: Option<Real>) -> Result<GridStepStats, GridError> {
+    /// One step at the solver's own stable step, the last ones shortened to land on `end`
+    /// ([`towards_end`]): how a driver of this one solver steps.
+    pub fn step(&mut self, end: Option<Real>) -> Result<GridStepStats, GridError> {
+        let dt = self.stable_dt()?;
+        self.advance(end.map_or(dt, |end| towards_end(dt, end - self.time)))
+    }
+
+    /// Advances by `dt`, which should not exceed [`Self::stable_dt`].
+    pub fn advance(&mut self, dt: Real) -> Result<GridStepStats, GridError> {
         let started = Instant::now();
-        let (dt, speed) = self.step_size(dt_limit)?;
+        let speed = self.mac.max_face_speed();
         let mut stats = GridStepStats {
             dt,
             cfl: speed * dt / self.mac.dx,
@@ -255,7 +230,9 @@ impl GridSolver {
         for (before, u) in self.before.iter_mut().zip(&self.mac.u) {
             before.clone_from(u);
         }
+        self.ran.clear();
         if self.bodies.iter().any(RigidBody::is_moving) {
+            self.ran.push("obstacles");
             let sides = self.bounds.sides;
             self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
             let cells = self.bounds.cell_kinds();
@@ -266,7 +243,7 @@ impl GridSolver {
         }
 
         let t0 = Instant::now();
-        let scheme = self.settings.advection;
+        let scheme = self.params.advection;
         self.bounds
             .extrapolate_into_obstacles(&mut self.mac, EXTRAPOLATION_LAYERS);
         if let Some(smoke) = self.smoke.as_mut() {
@@ -276,7 +253,8 @@ impl GridSolver {
                 *t = advect(t, stagger, &self.mac, dt, scheme);
             }
         }
-        if self.settings.reflection {
+        self.ran.push("advect");
+        if self.params.reflection {
             self.reflected_update(dt, &mut stats)?;
         } else {
             advect_velocity_into(&self.mac, dt, scheme, &mut self.advected);
@@ -289,12 +267,14 @@ impl GridSolver {
             stats.pressure_residual = solve.relative_residual;
         }
         stats.advect_seconds = t0.elapsed().as_secs_f64() - stats.project_seconds;
+        self.ran.push("pressure");
 
         self.time += dt;
         self.step += 1;
         stats.max_divergence = max_divergence(&self.mac, &self.bounds.fluid_mask());
         stats.change_rate = change_rate(&self.before, &self.mac.u) / dt;
         if let Some((start, avg)) = self.average.as_mut() {
+            self.ran.push("average");
             if self.time > *start {
                 avg.add(&self.mac, dt.min(self.time - *start));
             }
@@ -302,6 +282,93 @@ impl GridSolver {
         self.check_finite()?;
         stats.total_seconds = started.elapsed().as_secs_f64();
         Ok(stats)
+    }
+
+    /// The parts the last [`Self::advance`] ran, in order.
+    pub fn ran(&self) -> &[&'static str] {
+        &self.ran
+    }
+
+    /// One line on the grid as built, for `eddy run --plan`.
+    pub fn summary(&self) -> String {
+        let n = self.params.resolution;
+        format!(
+            "MAC grid of {} x {} x {} cells of {} m, {} obstacles",
+            n[0],
+            n[1],
+            n[2],
+            self.params.dx,
+            self.bodies.len()
+        )
+    }
+
+    /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
+    /// here), read from the same settings it branches on.
+    pub fn describe(&self) -> Vec<(&'static str, String)> {
+        let p = &self.params;
+        let mut out = Vec::new();
+        let moving = self.bodies.iter().filter(|b| b.is_moving()).count();
+        if moving > 0 {
+            out.push((
+                "obstacles",
+                format!("{moving} moving obstacles re-voxelised every step"),
+            ));
+        }
+        let scheme = match p.advection {
+            Advection::SemiLagrangian => "semi-Lagrangian",
+            Advection::Maccormack => "MacCormack",
+        };
+        let scalars = match &self.smoke {
+            Some(s) if s.temperature.is_some() => " and smoke density, temperature",
+            Some(_) => " and smoke density",
+            None => "",
+        };
+        let reflection = if p.reflection {
+            ", advection-reflection (two projections)"
+        } else {
+            ""
+        };
+        out.push((
+            "advect",
+            format!("{scheme} advection of velocity{scalars}{reflection}"),
+        ));
+        let mut forces = Vec::new();
+        if let Some(s) = &self.smoke {
+            forces.push(format!(
+                "smoke sources ({}), buoyancy {}",
+                s.sources.len(),
+                s.buoyancy
+            ));
+        }
+        if p.confinement > 0.0 {
+            forces.push(format!("vorticity confinement {}", p.confinement));
+        }
+        if p.gravity_force {
+            forces.push(format!("gravity {:?}", p.gravity.as_slice()));
+        }
+        if self.has_forces() {
+            out.push(("forces", forces.join(", ")));
+        }
+        if p.viscosity > 0.0 {
+            out.push((
+                "viscosity",
+                format!(
+                    "implicit ({:?}) nu = {} m^2/s, MGPCG per component",
+                    p.viscosity_scheme, p.viscosity
+                ),
+            ));
+        }
+        out.push((
+            "pressure",
+            format!(
+                "MGPCG projection to relative residual {} (at most {} iterations)",
+                p.pressure.tolerance, p.pressure.max_iterations
+            ),
+        ));
+        if let Some(t) = p.average_from {
+            out.push(("average", format!("time-averaged velocity from t = {t} s")));
+        }
+        out
     }
 
     /// Forces, sources, boundary conditions and viscosity over `dt`, before a projection.
@@ -312,7 +379,7 @@ impl GridSolver {
     ) -> Result<(), GridError> {
         self.apply_forces(dt);
         self.bounds.apply(&mut self.mac);
-        if self.settings.viscosity > 0.0 {
+        if self.params.viscosity > 0.0 {
             stats.viscosity_iterations = self.diffuse(dt)?;
         }
         Ok(())
@@ -324,7 +391,7 @@ impl GridSolver {
     /// It costs a second projection and removes most of the energy that the first-order
     /// advect-then-project splitting loses.
     fn reflected_update(&mut self, dt: Real, stats: &mut GridStepStats) -> Result<(), GridError> {
-        let scheme = self.settings.advection;
+        let scheme = self.params.advection;
         let half = 0.5 * dt;
         self.mac.u = advect_velocity(&self.mac, half, scheme);
         self.apply_forces(dt);
@@ -351,7 +418,7 @@ impl GridSolver {
             )
         });
         self.bounds.apply(&mut self.mac);
-        if self.settings.viscosity > 0.0 {
+        if self.params.viscosity > 0.0 {
             stats.viscosity_iterations = self.diffuse(dt)?;
         }
         let t2 = Instant::now();
@@ -363,10 +430,10 @@ impl GridSolver {
         Ok(())
     }
 
-    /// The CFL step, or the fixed step, shortened to `limit` (the end time or next frame), and
-    /// the largest face speed it was chosen for.
-    fn step_size(&self, limit: Option<Real>) -> Result<(Real, Real), GridError> {
-        let s = &self.settings;
+    /// The largest stable step of the current state: the CFL step on the largest face speed
+    /// (at most `dt_max`), or the fixed step. Errs when the CFL rule needs less than `dt_min`.
+    pub fn stable_dt(&self) -> Result<Real, GridError> {
+        let s = &self.params.limits;
         let speed = self.mac.max_face_speed();
         let dt = s.fixed_dt.unwrap_or_else(|| {
             if speed > 0.0 {
@@ -385,14 +452,19 @@ impl GridSolver {
                 ),
             });
         }
-        Ok((
-            limit.map_or(dt, |l| crate::stepping::towards_end(dt, l)),
-            speed,
-        ))
+        Ok(dt)
+    }
+
+    /// Whether a step applies forces: smoke sources and buoyancy, confinement or gravity.
+    fn has_forces(&self) -> bool {
+        self.smoke.is_some() || self.params.confinement > 0.0 || self.params.gravity_force
     }
 
     /// Buoyancy and vorticity confinement, and the smoke sources.
     fn apply_forces(&mut self, dt: Real) {
+        if self.has_forces() {
+            self.ran.push("forces");
+        }
         if let Some(smoke) = self.smoke.as_mut() {
             for src in &smoke.sources {
                 set_where(&mut smoke.density, &src.cells, src.density);
@@ -419,16 +491,17 @@ impl GridSolver {
                     smoke.temperature.as_ref(),
                     smoke.buoyancy,
                     smoke.heat_buoyancy,
-                    self.settings.up,
+                    self.up,
                 );
                 add_cell_acceleration(&mut self.mac, &lift, dt);
             }
         }
-        if self.settings.confinement > 0.0 {
-            let f = confinement(&self.mac, self.settings.confinement);
+        if self.params.confinement > 0.0 {
+            let f = confinement(&self.mac, self.params.confinement);
             add_cell_acceleration(&mut self.mac, &f, dt);
         }
-        if let Some(g) = self.settings.gravity {
+        if self.params.gravity_force {
+            let g = self.params.gravity;
             for (u, ga) in self.mac.u.iter_mut().zip(g.iter()) {
                 u.par_mapv_inplace(|v| v + dt * ga);
             }
@@ -437,16 +510,17 @@ impl GridSolver {
 
     /// Backward-Euler viscosity, one solve per component; returns the most iterations any took.
     fn diffuse(&mut self, dt: Real) -> Result<usize, GridError> {
-        let a = self.settings.viscosity * dt / (self.mac.dx * self.mac.dx);
+        self.ran.push("viscosity");
+        let a = self.params.viscosity * dt / (self.mac.dx * self.mac.dx);
         let mut iterations = 0;
         for c in 0..3 {
             let stats = diffuse_component(
                 &self.bounds,
                 c,
                 a,
-                self.settings.viscosity_scheme,
+                self.params.viscosity_scheme,
                 &mut self.mac.u[c],
-                &self.settings.pressure,
+                &self.params.pressure,
                 &mut self.diffusion[c],
             )
             .map_err(|source| self.solve_error("viscosity", source))?;
@@ -458,14 +532,14 @@ impl GridSolver {
 
     /// Projects the velocity and stores the pressure of a step of length `dt`.
     fn project(&mut self, dt: Real) -> Result<super::poisson::SolveStats, GridError> {
-        let to_pressure = self.settings.density * self.mac.dx / dt;
+        let to_pressure = self.params.density * self.mac.dx / dt;
         self.scaled_pressure = self.pressure.mapv(|p| p / to_pressure);
         let stats = project(
             &mut self.mac,
             &self.bounds,
             &mut self.system,
             &mut self.scaled_pressure,
-            &self.settings.pressure,
+            &self.params.pressure,
         )
         .map_err(|source| self.solve_error("pressure", source))?;
         self.pressure = self.scaled_pressure.mapv(|y| y * to_pressure);
@@ -492,7 +566,7 @@ impl GridSolver {
         if !speed.is_finite() {
             return Err(unstable("a face velocity is not finite".into()));
         }
-        let dt = self.settings.fixed_dt.unwrap_or(self.settings.dt_max);
+        let dt = self.params.limits.fixed_dt.unwrap_or(self.params.limits.dt_max);
         if speed * dt / self.mac.dx > CFL_BLOWUP {
             return Err(unstable(format!(
                 "speed {speed:.3e} m/s would cross {CFL_BLOWUP} cells per step"
@@ -503,17 +577,26 @@ impl GridSolver {
 
     /// Kinetic energy of the fluid cells, J (with `grid.density`).
     pub fn kinetic_energy(&self) -> Real {
-        self.settings.density * self.mac.kinetic_energy(&self.bounds.fluid_mask())
+        self.params.density * self.mac.kinetic_energy(&self.bounds.fluid_mask())
     }
 
     /// Fluid density, kg/m^3.
     pub fn density(&self) -> Real {
-        self.settings.density
+        self.params.density
     }
 
     /// Kinematic viscosity, m^2/s.
     pub fn viscosity(&self) -> Real {
-        self.settings.viscosity
+        self.params.viscosity
+    }
+}
+
+/// The unit vector against `gravity`, or y when there is none.
+fn up_of(gravity: Vec3) -> Vec3 {
+    if gravity.norm() > 0.0 {
+        -gravity.normalize()
+    } else {
+        Vec3::y()
     }
 }
 
@@ -554,11 +637,7 @@ fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
 }
 
 /// Builds the smoke fields and voxelises the sources (static, in the world frame).
-fn smoke_state(
-    mac: &MacGrid,
-    grid: &Grid,
-    smoke: &crate::scene::Smoke,
-) -> Result<SmokeState, GridError> {
+fn smoke_state(mac: &MacGrid, smoke: &Smoke) -> Result<SmokeState, GridError> {
     let sources = smoke
         .sources
         .iter()
@@ -567,7 +646,7 @@ fn smoke_state(
         .collect::<Result<Vec<_>, _>>()?;
     Ok(SmokeState {
         density: Array3::zeros(mac.dims),
-        temperature: grid.has_temperature().then(|| Array3::zeros(mac.dims)),
+        temperature: smoke.has_temperature().then(|| Array3::zeros(mac.dims)),
         buoyancy: smoke.buoyancy,
         heat_buoyancy: smoke.heat_buoyancy,
         sources,

@@ -1,13 +1,17 @@
 //! Per-step diagnostics and probes. Each is computed only when a scene asks for it.
 
+pub mod grid_probes;
 pub mod probes;
 pub mod series;
+mod spec;
 
 use crate::parallel::sum_by;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
+pub use grid_probes::GridProbeRecorder;
 pub use probes::ProbeRecorder;
+pub use spec::{Axis, Metric, Probe};
 pub use series::MetricsRecorder;
 
 /// Kinetic energy sum_i m |v_i|^2 / 2, J.

@@ -2,7 +2,7 @@
 //! an axis, and pressure and velocity at a point.
 
 use crate::io::{CsvSeries, IoError};
-use crate::scene::Probe;
+use super::spec::Probe;
 use crate::sph::SphSolver;
 use crate::{Real, Vec3};
 use std::path::Path;

@@ -1,6 +1,7 @@
-//! SPH turbulence refinements on top of DFSPH or IISPH, behind one small trait.
+//! SPH turbulence refinements on top of DFSPH or IISPH, behind one small trait, attached to the
+//! solver as a step hook (`crate::sph::hooks`).
 //!
-//! The solver calls a refinement at two points of its step (see `crate::sph::solver`):
+//! The solver calls a refinement at two points of its step:
 //!
 //! - [`Refiner::before_advection`], after the DFSPH divergence solve (which ends the previous
 //!   step in Bender & Koschier's order) and before the non-pressure forces are applied: the
@@ -12,30 +13,20 @@
 //!
 //! Refinements that keep per-particle state are told of every reordering of the fluid.
 
-pub mod bench;
 pub mod biot_savart;
 mod clusters;
 pub mod confinement;
 pub mod mcvsph;
 pub mod micropolar;
+pub mod params;
 pub mod rankine;
 pub mod vrsph;
 
-use crate::scene::Refinement;
-use crate::sph::operators::Operators;
-use crate::{Real, Vec3};
+pub use crate::sph::hooks::StepContext;
+pub use params::{InvalidParam, Refinement};
 
-/// What a refinement may read during a step.
-pub struct StepContext<'a> {
-    /// The shared difference operators of the current neighbourhood.
-    pub ops: Operators<'a>,
-    /// Step size, s.
-    pub dt: Real,
-    /// Kinematic viscosity of the fluid, m^2/s.
-    pub nu: Real,
-    /// Particle spacing, m.
-    pub spacing: Real,
-}
+use crate::sph::hooks::StepHook;
+use crate::{Real, Vec3};
 
 /// One turbulence refinement.
 pub trait Refiner: Send {
@@ -86,6 +77,56 @@ pub fn build(cfg: &Refinement, n: usize, seed: u64) -> Option<Box<dyn Refiner>> 
         } => Box::new(micropolar::Micropolar::new(n, nu_t, micro_inertia)),
         Refinement::Confinement { epsilon, .. } => Box::new(confinement::Confinement::new(epsilon)),
     })
+}
+
+/// The refinement a scene asks for as a step hook of the SPH solver; None for `none`.
+pub fn hook(cfg: &Refinement, n: usize, seed: u64) -> Option<Box<dyn StepHook>> {
+    build(cfg, n, seed).map(|refiner| {
+        Box::new(RefinementHook {
+            refiner,
+            cfg: cfg.clone(),
+        }) as Box<dyn StepHook>
+    })
+}
+
+/// A refinement with the parameters it was built from, attached to the solver's step.
+struct RefinementHook {
+    refiner: Box<dyn Refiner>,
+    cfg: Refinement,
+}
+
+impl StepHook for RefinementHook {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        self.cfg.plan_line().unwrap_or_default()
+    }
+
+    fn walls(&self) -> bool {
+        self.cfg.walls()
+    }
+
+    fn permute(&mut self, perm: &[u32]) {
+        self.refiner.permute(perm);
+    }
+
+    fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], accel: &mut [Vec3]) {
+        self.refiner.before_advection(ctx, v, accel);
+    }
+
+    fn after_pressure(&mut self, ctx: &StepContext, v: &mut [Vec3]) {
+        self.refiner.after_pressure(ctx, v);
+    }
+
+    fn rotational_energy(&self, mass: Real) -> Real {
+        self.refiner.rotational_energy(mass)
+    }
+
+    fn fields(&self) -> Vec<(&'static str, &[Vec3])> {
+        self.refiner.fields()
+    }
 }
 
 /// `v += scale * dv`, in parallel.

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::validate::{Checker, Interval};
+pub use crate::grid::{Advection, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 use super::{Scene, SceneError, Shape};
 use crate::Real;
 
@@ -74,123 +75,7 @@ fn default_pressure_tolerance() -> Real {
     1e-6
 }
 fn default_pressure_max_iterations() -> u32 {
-    500
-}
-
-/// Advection scheme of velocity and scalars.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Advection {
-    /// Semi-Lagrangian, trilinear, second-order (midpoint) backtrace.
-    SemiLagrangian,
-    /// MacCormack (Selle et al. 2008), clamped to the backtrace stencil's range.
-    #[default]
-    Maccormack,
-}
-
-/// Time discretisation of the implicit viscosity.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ViscosityScheme {
-    /// First order, L-stable.
-    #[default]
-    BackwardEuler,
-    /// Second order, A-stable.
-    CrankNicolson,
-}
-
-/// One side of the grid's domain.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum GridSide {
-    /// A static no-slip wall.
-    #[default]
-    Wall,
-    /// A wall moving in its own plane with this velocity, m/s (a cavity lid).
-    MovingWall([Real; 3]),
-    /// A free-slip wall.
-    Slip,
-    /// Open outflow: zero pressure beyond the side.
-    Open,
-    /// Inflow at this velocity, m/s.
-    Inflow([Real; 3]),
-    /// Wraps to the opposite side, which must be periodic too.
-    Periodic,
-}
-
-/// The six sides of the grid's domain.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GridBoundary {
-    #[serde(default)]
-    pub x_min: GridSide,
-    #[serde(default)]
-    pub x_max: GridSide,
-    #[serde(default)]
-    pub y_min: GridSide,
-    #[serde(default)]
-    pub y_max: GridSide,
-    #[serde(default)]
-    pub z_min: GridSide,
-    #[serde(default)]
-    pub z_max: GridSide,
-}
-
-impl GridBoundary {
-    /// The sides as `[axis][0 = min, 1 = max]`.
-    pub fn sides(&self) -> [[GridSide; 2]; 3] {
-        [
-            [self.x_min, self.x_max],
-            [self.y_min, self.y_max],
-            [self.z_min, self.z_max],
-        ]
-    }
-}
-
-/// Smoke: passive density and temperature carried by the flow, lifted by buoyancy.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Smoke {
-    /// Regions that set smoke density and temperature every step.
-    pub sources: Vec<SmokeSource>,
-    /// Buoyancy per unit smoke density, m/s^2, against gravity's direction (Fedkiw et al. 2001
-    /// use it with a minus sign on density: here positive density rises).
-    #[serde(default = "default_buoyancy")]
-    pub buoyancy: Real,
-    /// Buoyancy per unit temperature above ambient, m/s^2.
-    #[serde(default)]
-    pub heat_buoyancy: Real,
-}
-
-fn default_buoyancy() -> Real {
-    1.0
-}
-
-/// A region that sets smoke every step.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SmokeSource {
-    /// An analytic shape (no meshes), in the source's frame.
-    pub shape: Shape,
-    /// Position of the shape's origin, m.
-    #[serde(default)]
-    pub position: [Real; 3],
-    /// Orientation as a rotation vector, radians.
-    #[serde(default)]
-    pub rotation: [Real; 3],
-    /// Smoke density set inside.
-    #[serde(default = "default_source_density")]
-    pub density: Real,
-    /// Temperature above ambient set inside.
-    #[serde(default)]
-    pub temperature: Real,
-    /// Velocity set on the faces inside, m/s; left alone when not given.
-    #[serde(default)]
-    pub velocity: Option<[Real; 3]>,
-}
-
-fn default_source_density() -> Real {
-    1.0
+    crate::grid::params::PRESSURE_MAX_ITERATIONS as u32
 }
 
 impl Grid {
@@ -201,87 +86,7 @@ impl Grid {
 
     /// Whether a temperature field is needed.
     pub fn has_temperature(&self) -> bool {
-        self.smoke.as_ref().is_some_and(|s| {
-            s.heat_buoyancy != 0.0 && s.sources.iter().any(|src| src.temperature != 0.0)
-        })
-    }
-}
-
-impl Grid {
-    /// The stages a step of this grid runs, for `eddy run --plan`: (name, what it does here).
-    pub fn stages(&self, scene: &Scene) -> Vec<(&'static str, String)> {
-        let mut out = Vec::new();
-        let n = self.resolution;
-        let moving = scene.obstacles.iter().filter(|b| super::plan::is_moving(b));
-        out.push((
-            "grid",
-            format!(
-                "MAC grid {} x {} x {} cells of {} m, {} obstacles ({} moving: re-voxelised every step)",
-                n[0],
-                n[1],
-                n[2],
-                self.spacing(scene),
-                scene.obstacles.len(),
-                moving.count()
-            ),
-        ));
-        let scheme = match self.advection {
-            Advection::SemiLagrangian => "semi-Lagrangian",
-            Advection::Maccormack => "MacCormack",
-        };
-        let scalars = match (&self.smoke, self.has_temperature()) {
-            (Some(_), true) => " and smoke density, temperature",
-            (Some(_), false) => " and smoke density",
-            (None, _) => "",
-        };
-        out.push((
-            "advect",
-            format!(
-                "{scheme} advection of velocity{scalars}{}",
-                if self.reflection {
-                    ", advection-reflection (two projections)"
-                } else {
-                    ""
-                }
-            ),
-        ));
-        let mut forces = Vec::new();
-        if let Some(s) = &self.smoke {
-            forces.push(format!(
-                "smoke sources ({}), buoyancy {}",
-                s.sources.len(),
-                s.buoyancy
-            ));
-        }
-        if self.vorticity_confinement > 0.0 {
-            forces.push(format!(
-                "vorticity confinement {}",
-                self.vorticity_confinement
-            ));
-        }
-        if !forces.is_empty() {
-            out.push(("forces", forces.join(", ")));
-        }
-        if scene.viscosity.kinematic > 0.0 {
-            out.push((
-                "viscosity",
-                format!(
-                    "implicit ({:?}) nu = {} m^2/s, MGPCG per component",
-                    self.viscosity_scheme, scene.viscosity.kinematic
-                ),
-            ));
-        }
-        out.push((
-            "pressure",
-            format!(
-                "MGPCG projection to relative residual {} (at most {} iterations)",
-                self.pressure_tolerance, self.pressure_max_iterations
-            ),
-        ));
-        if let Some(t) = self.average_from {
-            out.push(("average", format!("time-averaged velocity from t = {t} s")));
-        }
-        out
+        self.smoke.as_ref().is_some_and(Smoke::has_temperature)
     }
 }
 

@@ -1,11 +1,11 @@
-//! Scene files: the TOML schema, loading with overrides, validation, and the stage plan.
+//! Scene files: the TOML schema, loading with overrides, validation, and the parameters of the
+//! parts built from a resolved scene.
 
+pub mod build;
 pub mod error;
 pub mod grid;
 pub mod load;
 pub mod overrides;
-pub mod plan;
-pub mod refinement;
 pub mod schema;
 pub mod validate;
 
@@ -13,5 +13,5 @@ pub use error::SceneError;
 pub use grid::{Advection, Grid, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 pub use load::{load, parse_str};
 pub use overrides::apply_override;
-pub use refinement::Refinement;
+pub use crate::refine::Refinement;
 pub use schema::*;

@@ -67,7 +67,9 @@ impl Scene {
         }
         self.validate_solvers(&c)?;
         self.validate_grid(&c)?;
-        self.refinement.validate(file)?;
+        self.refinement
+            .validate()
+            .map_err(|e| c.invalid(e.key, e.value, e.allowed))?;
         self.validate_probes(&c)?;
         c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
         let mut metrics = HashSet::new();

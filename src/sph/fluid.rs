@@ -2,7 +2,7 @@
 
 use super::kernel::CubicSpline;
 use super::neighbors::permute;
-use crate::scene::FluidBlock;
+use super::params::FluidBlock;
 use crate::{Real, Vec3};
 
 /// Fluid particle state. All particles share one mass.

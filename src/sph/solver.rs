@@ -1,24 +1,27 @@
 //! One SPH fluid with its boundaries, stepped in time.
 //!
-//! A step is split in two so that the driver can measure and write the state between them:
-//! [`SphSolver::update_neighborhoods`] sorts the particles, rebuilds the neighbour lists and
-//! computes densities at the current time; [`SphSolver::advance`] then runs the divergence
-//! solve (DFSPH), the non-pressure forces, the CFL step size, the pressure solve and the
-//! position update, following Bender & Koschier 2017, Algorithm 1.
+//! A step is split so that a driver can measure and write the state between its parts and step
+//! several solvers on one clock: [`SphSolver::update_neighborhoods`] sorts the particles,
+//! rebuilds the neighbour lists and computes densities at the current time;
+//! [`SphSolver::stable_dt`] computes the non-pressure forces and the CFL step they allow;
+//! [`SphSolver::advance`] then runs the divergence solve (DFSPH), the step hooks, the pressure
+//! solve and the position update over the `dt` the driver chose, following Bender & Koschier
+//! 2017, Algorithm 1.
 
 use super::boundary::BoundaryParticles;
 use super::dfsph::{self, Bounds, Solve, SolveResult};
 use super::fluid::FluidParticles;
 use super::forces;
+use super::hooks::{StepContext, StepHook};
 use super::iisph;
 use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order, CellGrid, NeighborLists};
 use super::operators::{self, Operators, WallField};
 use super::pair_cache::{Densities, PairCache};
+use super::params::{PressureSolverKind, SphParams};
 use crate::geometry::RigidBody;
-use crate::refine::{self, Refiner, StepContext};
-use crate::scene::{Pressure, PressureSolverKind, Scene, Viscosity};
+use crate::stepping::{towards_end, StepLimits};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -56,24 +59,13 @@ pub enum Instability {
     },
 }
 
-/// Time-stepping settings of the solver.
-#[derive(Debug, Clone)]
-pub struct Stepping {
-    pub cfl: Real,
-    pub dt_min: Real,
-    pub dt_max: Real,
-    pub fixed_dt: Option<Real>,
-    /// The run's end time: the last steps are shortened to land on it.
-    pub end: Option<Real>,
-}
-
 /// What one step did.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StepStats {
     pub dt: Real,
     pub divergence: SolveResult,
     pub pressure: SolveResult,
-    /// Wall-clock seconds spent in the turbulence refinement.
+    /// Wall-clock seconds spent in the step hooks (the turbulence refinement).
     pub refinement_seconds: Real,
     /// Wall-clock seconds spent in the divergence solve (DFSPH).
     pub divergence_seconds: Real,
@@ -88,11 +80,7 @@ pub struct SphSolver {
     pub boundary: BoundaryParticles,
     pub bodies: Vec<RigidBody>,
     pub spacing: Real,
-    gravity: Vec3,
-    pressure: Pressure,
-    viscosity: Viscosity,
-    stepping: Stepping,
-    domain: (Vec3, Vec3),
+    params: SphParams,
     grid: CellGrid,
     fluid_lists: NeighborLists,
     boundary_lists: NeighborLists,
@@ -106,32 +94,43 @@ pub struct SphSolver {
     step: u64,
     /// The last step's size; the stored stiffnesses (kappa dt^2) are rescaled when dt changes.
     last_dt: Option<Real>,
-    /// The turbulence refinement, if the scene has one.
-    refiner: Option<Box<dyn Refiner>>,
-    /// Per fluid particle m / rho, the volume of the refinements' operators (kept across
-    /// steps for its memory).
+    /// The non-pressure accelerations [`Self::stable_dt`] computed for the current state, for
+    /// the [`Self::advance`] that follows it.
+    pending_accel: Option<Vec<Vec3>>,
+    /// Work attached to the step (the turbulence refinement, vortex synthesis), in order.
+    hooks: Vec<Box<dyn StepHook>>,
+    /// Per fluid particle m / rho, the volume of the hooks' operators (kept across steps for
+    /// its memory).
     refine_volume: Vec<Real>,
-    /// Boundary samples take part in the difference operators (`refinement.walls`).
-    walls_in_operators: bool,
+    /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
+    /// them).
+    ran: Vec<&'static str>,
 }
 
 impl SphSolver {
-    /// Builds the fluid of `scene` (which must have one) with the given bodies.
-    pub fn new(scene: &Scene, bodies: Vec<RigidBody>) -> Self {
-        let fluid_cfg = scene
-            .fluid
-            .as_ref()
-            .expect("SphSolver::new needs a scene with a fluid");
-        let spacing = fluid_cfg.spacing;
+    /// Builds the fluid of `params` among `bodies` (the container first, when
+    /// `params.container`), and its neighbourhood at t = 0.
+    pub fn new(params: &SphParams, bodies: Vec<RigidBody>) -> Self {
+        Self::with_hooks(params, bodies, |_| Vec::new())
+    }
+
+    /// [`Self::new`] with the step hooks `hooks(n)` makes for the n fluid particles, attached
+    /// before the first neighbourhood sort, so that per-particle state they draw at random
+    /// follows the particles from the start.
+    pub fn with_hooks(
+        params: &SphParams,
+        bodies: Vec<RigidBody>,
+        hooks: impl FnOnce(usize) -> Vec<Box<dyn StepHook>>,
+    ) -> Self {
+        let spacing = params.spacing;
         let kernel = CubicSpline::new(2.0 * spacing);
         // Akinci walls hold fluid about 1.5 spacings off (see `boundary`): lattice sites closer
         // than one spacing to a surface, or inside an obstacle, stay empty.
-        let has_container = scene.container.is_some();
         let keep = |x: &Vec3| {
             let p = crate::Point3::from(*x);
             bodies.iter().enumerate().all(|(i, b)| {
                 let d = b.signed_distance(0.0, &p);
-                if i == 0 && has_container {
+                if i == 0 && params.container {
                     d <= -spacing
                 } else {
                     d >= spacing
@@ -139,9 +138,9 @@ impl SphSolver {
             })
         };
         let fluid = FluidParticles::from_blocks(
-            &fluid_cfg.blocks,
+            &params.blocks,
             spacing,
-            fluid_cfg.density,
+            params.rest_density,
             &kernel,
             keep,
         );
@@ -153,17 +152,7 @@ impl SphSolver {
             boundary,
             bodies,
             spacing,
-            gravity: Vec3::from(scene.gravity),
-            pressure: scene.pressure.clone(),
-            viscosity: scene.viscosity.clone(),
-            stepping: Stepping {
-                cfl: scene.time.cfl,
-                dt_min: scene.time.dt_min,
-                dt_max: scene.time.dt_max,
-                fixed_dt: scene.time.dt,
-                end: scene.time.end,
-            },
-            domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
+            params: params.clone(),
             grid: CellGrid::build(&[], 2.0 * spacing),
             fluid_lists: NeighborLists::default(),
             boundary_lists: NeighborLists::default(),
@@ -173,17 +162,23 @@ impl SphSolver {
             time: 0.0,
             step: 0,
             last_dt: None,
-            refiner: refine::build(&scene.refinement, n, scene.seed),
+            pending_accel: None,
+            hooks: hooks(n),
             refine_volume: Vec::new(),
-            walls_in_operators: scene.refinement.walls(),
+            ran: Vec::new(),
         };
         me.update_neighborhoods();
         me
     }
 
-    /// Ends the run at `end` (the last step lands on it), e.g. an earlier `--until`.
-    pub fn stop_at(&mut self, end: Option<Real>) {
-        self.stepping.end = end;
+    /// The attached hooks, in the order they run.
+    pub fn hooks(&self) -> &[Box<dyn StepHook>] {
+        &self.hooks
+    }
+
+    /// The parameters the solver was built from.
+    pub fn params(&self) -> &SphParams {
+        &self.params
     }
 
     /// Simulated time, s.
@@ -217,12 +212,13 @@ impl SphSolver {
     /// Places moving bodies at the current time, sorts the fluid into cell order, rebuilds the
     /// neighbour lists, and computes the pairs' kernel gradients, densities and DFSPH factors.
     pub fn update_neighborhoods(&mut self) {
+        self.pending_accel = None;
         self.boundary.place(&self.bodies, self.time, false);
         let h = self.kernel.support();
         let perm = cell_order(&self.fluid.x, h);
         self.fluid.permute(&perm);
-        if let Some(r) = self.refiner.as_mut() {
-            r.permute(&perm);
+        for hook in &mut self.hooks {
+            hook.permute(&perm);
         }
         self.grid = CellGrid::build(&self.fluid.x, h);
         self.fluid_lists = NeighborLists::build(
@@ -263,9 +259,48 @@ impl SphSolver {
             .for_each(|(d, r)| *d = r * rho0);
     }
 
-    /// Advances one step from the state of the last [`Self::update_neighborhoods`].
-    pub fn advance(&mut self) -> Result<StepStats, Instability> {
+    /// One step at the solver's own stable step, the last ones shortened to land on `end`
+    /// ([`towards_end`]), then the neighbourhood update: how a driver of this one solver steps.
+    pub fn step(&mut self, end: Option<Real>) -> Result<StepStats, Instability> {
+        let dt = self.stable_dt()?;
+        let dt = end.map_or(dt, |end| towards_end(dt, end - self.time));
+        let stats = self.advance(dt)?;
+        self.update_neighborhoods();
+        Ok(stats)
+    }
+
+    /// The largest stable step of the current state: the CFL rule on v + a dt_max with the
+    /// non-pressure accelerations a (which the following [`Self::advance`] applies), or the
+    /// fixed step. Errs when the CFL rule needs less than `dt_min`.
+    pub fn stable_dt(&mut self) -> Result<Real, Instability> {
+        let accel = match self.pending_accel.take() {
+            Some(accel) => accel,
+            None => self.non_pressure_accelerations(),
+        };
+        let limits = &self.params.limits;
+        let dt = step_size(limits, self.spacing, &self.fluid.v, &accel).map_err(
+            |(needed, speed)| Instability::CflLimit {
+                time: self.time,
+                step: self.step,
+                needed,
+                dt_min: limits.dt_min,
+                speed,
+            },
+        )?;
+        self.pending_accel = Some(accel);
+        Ok(dt)
+    }
+
+    /// Advances by `dt` from the state of the last [`Self::update_neighborhoods`]; `dt` should
+    /// not exceed [`Self::stable_dt`].
+    pub fn advance(&mut self, dt: Real) -> Result<StepStats, Instability> {
+        let mut accel = match self.pending_accel.take() {
+            Some(accel) => accel,
+            None => self.non_pressure_accelerations(),
+        };
         let mut stats = StepStats::default();
+        let ran = &mut self.ran;
+        ran.clear();
         let FluidParticles {
             x,
             v,
@@ -286,29 +321,13 @@ impl SphSolver {
             volume: *mass / rho0,
             pairs: &self.pairs,
         };
-        let settings = &self.pressure;
+        let settings = &self.params.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
         let bounds = |tolerance| Bounds {
             tolerance,
             min_iterations: settings.min_iterations,
             max_iterations: settings.max_iterations,
         };
-        let mut accel =
-            non_pressure_accelerations(&nb, density, rho0, v, self.gravity, &self.viscosity);
-        let dt =
-            step_size(&self.stepping, self.spacing, v, &accel).map_err(|(needed, speed)| {
-                Instability::CflLimit {
-                    time: self.time,
-                    step: self.step,
-                    needed,
-                    dt_min: self.stepping.dt_min,
-                    speed,
-                }
-            })?;
-        let dt = self
-            .stepping
-            .end
-            .map_or(dt, |end| crate::stepping::towards_end(dt, end - self.time));
         stats.dt = dt;
         // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
         // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
@@ -332,29 +351,35 @@ impl SphSolver {
                 bounds(settings.divergence_tolerance),
             );
             stats.divergence_seconds = start.elapsed().as_secs_f64();
+            ran.push("divergence");
         }
-        let walls = self.walls_in_operators;
-        let refine_ctx = |volume| StepContext {
+        let viscosity = &self.params.viscosity;
+        let hook_ctx = |volume, walls| StepContext {
             ops: Operators { nb, volume, walls },
             dt,
-            nu: self.viscosity.kinematic,
+            nu: viscosity.kinematic,
             spacing: self.spacing,
         };
         let volume = &mut self.refine_volume;
-        if let Some(r) = self.refiner.as_mut() {
+        if !self.hooks.is_empty() {
             let start = Instant::now();
             operators::volumes_into(*mass, density, volume);
-            r.before_advection(&refine_ctx(volume), v, &mut accel);
+            for hook in &mut self.hooks {
+                hook.before_advection(&hook_ctx(volume, hook.walls()), v, &mut accel);
+                ran.push(hook.name());
+            }
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
+        ran.push("forces");
         v.par_iter_mut()
             .zip(accel.par_iter())
             .for_each(|(v, a)| *v += dt * a);
-        if self.viscosity.xsph > 0.0 {
-            forces::xsph(&nb, density, rho0, v, self.viscosity.xsph);
+        if viscosity.xsph > 0.0 {
+            forces::xsph(&nb, density, rho0, v, viscosity.xsph);
         }
         let pressure_bounds = bounds(settings.density_tolerance);
         let start = Instant::now();
+        ran.push("pressure");
         stats.pressure = if dfsph {
             dfsph::solve(
                 &nb,
@@ -378,9 +403,11 @@ impl SphSolver {
             )
         };
         stats.pressure_seconds = start.elapsed().as_secs_f64();
-        if let Some(r) = self.refiner.as_mut() {
+        if !self.hooks.is_empty() {
             let start = Instant::now();
-            r.after_pressure(&refine_ctx(volume), v);
+            for hook in &mut self.hooks {
+                hook.after_pressure(&hook_ctx(volume, hook.walls()), v);
+            }
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
@@ -391,39 +418,123 @@ impl SphSolver {
         x.par_iter_mut()
             .zip(v.par_iter())
             .for_each(|(x, v)| *x += dt * v);
+        ran.push("advect");
         self.time += dt;
         self.step += 1;
         self.check()?;
         Ok(stats)
     }
 
+    /// One line on the fluid as built, for `eddy run --plan`.
+    pub fn summary(&self) -> String {
+        let moving = self.bodies.iter().filter(|b| b.is_moving()).count();
+        format!(
+            "SPH fluid of {} particles at {} m, {} Akinci boundary samples on {} bodies ({moving} \
+             moving: re-placed every step)",
+            self.fluid.len(),
+            self.spacing,
+            self.boundary.len(),
+            self.bodies.len()
+        )
+    }
+
+    /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
+    /// here), read from the same settings and hooks it branches on; [`Self::ran`] names the
+    /// parts a step did run the same way.
+    pub fn describe(&self) -> Vec<(&'static str, String)> {
+        let p = &self.params;
+        let mut out = Vec::new();
+        let settings = &p.pressure;
+        let dfsph = settings.solver == PressureSolverKind::Dfsph;
+        if dfsph && settings.divergence_solver {
+            out.push((
+                "divergence",
+                format!(
+                    "DFSPH divergence solve, tolerance {}",
+                    settings.divergence_tolerance
+                ),
+            ));
+        }
+        out.extend(self.hooks.iter().map(|h| (h.name(), h.describe())));
+        let v = &p.viscosity;
+        let mut forces = format!("gravity {:?}", p.gravity.as_slice());
+        if v.kinematic > 0.0 || v.boundary > 0.0 {
+            forces += &format!(
+                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {}",
+                v.kinematic, v.boundary
+            );
+        }
+        if v.xsph > 0.0 {
+            forces += &format!(", XSPH {}", v.xsph);
+        }
+        out.push(("forces", forces));
+        out.push((
+            "pressure",
+            format!(
+                "{} density solve, tolerance {} ({} to {} iterations)",
+                if dfsph { "DFSPH" } else { "IISPH" },
+                settings.density_tolerance,
+                settings.min_iterations,
+                settings.max_iterations
+            ),
+        ));
+        out.push(("advect", "positions, then NaN and domain checks".into()));
+        out
+    }
+
+    /// The parts the last [`Self::advance`] ran, in order.
+    pub fn ran(&self) -> &[&'static str] {
+        &self.ran
+    }
+
+    /// One line on [`Self::update_neighborhoods`], for `eddy run --plan`.
+    pub fn describe_neighbourhood(&self) -> String {
+        format!(
+            "z-order sort and compact hashed grid (cell = support = {} m), densities and DFSPH \
+             factors",
+            self.kernel.support()
+        )
+    }
+
     /// The vorticity curl v of the current state, by the shared difference curl (with the
-    /// walls when the refinement lets them into its operators).
+    /// walls when a hook lets them into its operators).
     pub fn vorticity(&self) -> Vec<Vec3> {
         let volume = operators::volumes(self.fluid.mass, &self.fluid.density);
         Operators {
             nb: self.neighborhood(),
             volume: &volume,
-            walls: self.walls_in_operators,
+            walls: self.hooks.iter().any(|h| h.walls()),
         }
         .curl(&self.fluid.v, WallField::Velocity)
     }
 
-    /// Rotational kinetic energy held by the refinement (micropolar), J; zero otherwise.
+    /// Rotational kinetic energy held by the hooks (a micropolar refinement), J.
     pub fn rotational_energy(&self) -> Real {
-        self.refiner
-            .as_ref()
-            .map_or(0.0, |r| r.rotational_energy(self.fluid.mass))
+        self.hooks
+            .iter()
+            .fold(0.0, |e, h| e + h.rotational_energy(self.fluid.mass))
     }
 
-    /// Per-particle fields the refinement adds to output frames.
+    /// Per-particle fields the hooks add to output frames.
     pub fn refinement_fields(&self) -> Vec<(&'static str, &[Vec3])> {
-        self.refiner.as_ref().map_or_else(Vec::new, |r| r.fields())
+        self.hooks.iter().flat_map(|h| h.fields()).collect()
+    }
+
+    /// Gravity plus viscosity on the current state.
+    fn non_pressure_accelerations(&self) -> Vec<Vec3> {
+        non_pressure_accelerations(
+            &self.neighborhood(),
+            &self.fluid.density,
+            self.fluid.rest_density,
+            &self.fluid.v,
+            self.params.gravity,
+            &self.params.viscosity,
+        )
     }
 
     /// Stops the run on a non-finite state or a particle outside the domain.
     fn check(&self) -> Result<(), Instability> {
-        let (lo, hi) = self.domain;
+        let (lo, hi) = self.params.domain;
         let bad = self
             .fluid
             .x
@@ -477,7 +588,7 @@ impl SphSolver {
 /// The CFL step size (Bender & Koschier: dt = cfl * spacing / max |v + a dt_max|), or the
 /// fixed step. Err gives the step the CFL rule needs and the speed, when below `dt_min`.
 fn step_size(
-    s: &Stepping,
+    s: &StepLimits,
     spacing: Real,
     v: &[Vec3],
     accel: &[Vec3],
@@ -508,7 +619,7 @@ fn non_pressure_accelerations(
     rest_density: Real,
     v: &[Vec3],
     gravity: Vec3,
-    viscosity: &Viscosity,
+    viscosity: &super::Viscosity,
 ) -> Vec<Vec3> {
     let viscous = viscosity.kinematic > 0.0 || viscosity.boundary > 0.0;
     (0..v.len())

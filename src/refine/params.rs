@@ -1,5 +1,5 @@
-//! The `[refinement]` scene section: which SPH turbulence refinement runs and its parameters,
-//! with their validation. Defaults are the papers' values.
+//! The refinements' parameters, as the scene's `[refinement]` section writes them: which SPH
+//! turbulence refinement runs, its parameters with the papers' defaults, and their validation.
 //!
 //! ```toml
 //! [refinement]
@@ -20,10 +20,18 @@
 //! pair it with `viscosity.boundary > 0`.
 
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 
-use super::SceneError;
 use crate::Real;
+
+/// A refinement parameter outside its allowed range: the dotted key, the value and what is
+/// allowed (the scene names its file around it).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key} = {value}: allowed is {allowed}")]
+pub struct InvalidParam {
+    pub key: String,
+    pub value: String,
+    pub allowed: String,
+}
 
 /// The refinement of a scene and its parameters.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -97,7 +105,7 @@ fn default_volume_coefficient() -> Real {
 }
 /// Under 1 % of the signal from the direct sum on the dam break (`crate::refine::biot_savart`).
 fn default_theta() -> Real {
-    crate::refine::biot_savart::DEFAULT_THETA
+    super::biot_savart::DEFAULT_THETA
 }
 /// Wang et al. Sec. 5 and Liu et al. Sec. 5: nu_t = 0.05 matches beta = 1 and alpha = 1.
 fn default_nu_t() -> Real {
@@ -138,8 +146,8 @@ impl Refinement {
         }
     }
 
-    /// Checks every parameter against its allowed range; errors name `file` and the key.
-    pub fn validate(&self, file: &Path) -> Result<(), SceneError> {
+    /// Checks every parameter against its allowed range; errors name the key.
+    pub fn validate(&self) -> Result<(), InvalidParam> {
         let check = |key: &str, value: Real, lo: Real, hi: Real, lo_open: bool, hi_open: bool| {
             let inside = value.is_finite()
                 && (if lo_open { value > lo } else { value >= lo })
@@ -156,8 +164,7 @@ impl Refinement {
                     if hi_open { ')' } else { ']' }
                 )
             };
-            Err(SceneError::Invalid {
-                file: file.to_owned(),
+            Err(InvalidParam {
                 key: format!("refinement.{key}"),
                 value: value.to_string(),
                 allowed: format!("{allowed} for method \"{}\"", self.method()),

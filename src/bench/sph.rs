@@ -4,7 +4,7 @@
 //! divergence tolerance 0.1 %, at least 2 iterations, viscosity 0.01. The scene file
 //! `scenes/bench_dam_break.toml` is the same set-up at the 97k size.
 
-use crate::run::{bodies, RunError};
+use crate::pipeline::{sph_solver, RunError};
 use crate::scene::{self, PressureSolverKind, Scene};
 use crate::sph::neighbors::{cell_order, CellGrid, NeighborLists};
 use crate::sph::{Instability, SphSolver};
@@ -28,7 +28,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 30)]
     pub steps: u64,
     /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
-    /// micropolar,confinement), at their paper defaults; see `crate::refine::bench`.
+    /// micropolar,confinement), at their paper defaults; see `super::refine`.
     #[arg(long, value_delimiter = ',')]
     pub refinements: Vec<String>,
     /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
@@ -76,7 +76,7 @@ pub fn dam_break_scene(edge: usize, solver: PressureSolverKind) -> Scene {
 
 /// [`dam_break_scene`] with further `--set` style overrides.
 pub fn dam_break_scene_with(edge: usize, solver: PressureSolverKind, extra: &[String]) -> Scene {
-    let text = include_str!("../scenes/bench_dam_break.toml");
+    let text = include_str!("../../scenes/bench_dam_break.toml");
     let spacing = 0.0212 * 46.0 / edge as Real;
     let side = edge as Real * spacing * (1.0 + 1e-9);
     let solver = match solver {
@@ -105,8 +105,7 @@ pub fn unstable(cause: Instability) -> RunError {
 /// Runs `steps` steps of `sph`, each with its neighbourhood update.
 pub fn advance(sph: &mut SphSolver, steps: u64) -> Result<(), RunError> {
     for _ in 0..steps {
-        sph.advance().map_err(unstable)?;
-        sph.update_neighborhoods();
+        sph.step(None).map_err(unstable)?;
     }
     Ok(())
 }
@@ -131,13 +130,14 @@ pub fn measure_with(
     steps: u64,
 ) -> Result<BenchResult, RunError> {
     let scene = dam_break_scene_with(edge, solver, extra);
-    let mut sph = SphSolver::new(&scene, bodies(&scene)?);
+    let mut sph = sph_solver(&scene)?;
     advance(&mut sph, warmup)?;
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
     let (mut update, mut divergence, mut pressure) = (0.0, 0.0, 0.0);
     for _ in 0..steps {
         let t0 = Instant::now();
-        let stats = sph.advance().map_err(unstable)?;
+        let dt = sph.stable_dt().map_err(unstable)?;
+        let stats = sph.advance(dt).map_err(unstable)?;
         let t1 = Instant::now();
         sph.update_neighborhoods();
         total += t0.elapsed().as_secs_f64();
@@ -238,7 +238,7 @@ pub fn run(args: &BenchArgs) -> Result<(), RunError> {
             );
         }
     }
-    crate::refine::bench::run(args)?;
+    super::refine::run(args)?;
     if let Some(rss) = peak_rss() {
         println!("peak resident memory: {:.1} MiB", rss as f64 / 1048576.0);
     }

@@ -4,10 +4,10 @@
 use std::path::Path;
 
 use crate::io::{CsvSeries, IoError};
-use crate::scene::Probe;
+use super::spec::Probe;
 use crate::{Point3, Real, Vec3};
 
-use super::solver::GridSolver;
+use crate::grid::GridSolver;
 
 /// The force of the fluid on one obstacle, N.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

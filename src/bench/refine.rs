@@ -10,11 +10,11 @@
 //! gradient, the fields at j) and only adds it up. No arithmetic, however fast, takes a pass
 //! below its floor, so the floors summed over a method's passes bound its overhead from below.
 
-use super::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
-use super::mcvsph::sample_indices;
-use super::vrsph::{stream_function, stream_strength};
-use crate::bench::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
-use crate::run::{bodies, RunError};
+use crate::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use crate::refine::mcvsph::sample_indices;
+use crate::refine::vrsph::{stream_function, stream_strength};
+use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
+use crate::pipeline::{sph_solver, RunError};
 use crate::scene::PressureSolverKind;
 use crate::sph::lanes::F4;
 use crate::sph::neighbors::NeighborLists;
@@ -158,7 +158,7 @@ fn warmed_dam_break(
     steps: u64,
 ) -> Result<(SphSolver, Real, Real), RunError> {
     let scene = dam_break_scene(edge, PressureSolverKind::Dfsph);
-    let mut sph = SphSolver::new(&scene, bodies(&scene)?);
+    let mut sph = sph_solver(&scene)?;
     advance(&mut sph, warmup)?;
     let t0 = Instant::now();
     advance(&mut sph, steps)?;

@@ -10,7 +10,8 @@ use std::time::Instant;
 use crate::scene::{self, Scene};
 use crate::Real;
 
-use super::solver::{GridError, GridSolver};
+use crate::grid::{GridError, GridSolver};
+use crate::scene::build::grid_params;
 
 /// Options of `eddy bench-grid`.
 #[derive(Debug, Clone, clap::Args)]
@@ -29,6 +30,12 @@ pub struct GridBenchArgs {
     pub taylor_green: Vec<usize>,
 }
 
+/// The grid of a built-in scene (which has a `[grid]` and no obstacles).
+fn grid_solver(scene: &Scene) -> Result<GridSolver, GridError> {
+    let params = grid_params(scene).expect("the built-in grid scenes have a [grid]");
+    GridSolver::new(&params, Vec::new())
+}
+
 /// The shipped smoke plume at `n`^3 cells.
 fn plume_scene(n: usize) -> Scene {
     scene::parse_str(
@@ -41,13 +48,13 @@ fn plume_scene(n: usize) -> Scene {
 
 /// Mean seconds per step of (advection, projection, total) and mean pressure iterations.
 pub fn time_plume(n: usize, warmup: u64, steps: u64) -> Result<[f64; 4], GridError> {
-    let mut solver = GridSolver::new(&plume_scene(n), Vec::new())?;
+    let mut solver = grid_solver(&plume_scene(n))?;
     for _ in 0..warmup {
-        solver.advance(None)?;
+        solver.step(None)?;
     }
     let mut sums = [0.0; 4];
     for _ in 0..steps {
-        let s = solver.advance(None)?;
+        let s = solver.step(None)?;
         for (sum, v) in sums.iter_mut().zip([
             s.advect_seconds,
             s.project_seconds,
@@ -107,12 +114,12 @@ impl TaylorGreen<'_> {
         let scene = scene::parse_str(&text, Path::new("taylor_green"), &[])
             .expect("the built-in Taylor-Green scene is valid for valid arguments");
         let started = Instant::now();
-        let mut g = GridSolver::new(&scene, Vec::new())?;
+        let mut g = grid_solver(&scene)?;
         g.set_velocity(|x| crate::Vec3::new(x.x.sin() * x.y.cos(), -x.x.cos() * x.y.sin(), 0.0))?;
         let e0 = g.kinetic_energy();
         let mut worst: Real = 0.0;
         while g.time() < end - 1e-12 {
-            g.advance(Some(end - g.time()))?;
+            g.step(Some(end))?;
             let exact = e0 * (-4.0 * nu * g.time()).exp();
             worst = worst.max((g.kinetic_energy() / exact).ln().abs());
         }

@@ -1,0 +1,12 @@
+//! The benchmark tables behind `eddy bench` and `eddy bench-grid`: SPH step times on the
+//! dam break ([`sph`]), the refinements' overheads against plain DFSPH ([`refine`]), and the
+//! MAC grid's plume step times and Taylor–Green error against run time ([`grid`]).
+
+pub mod grid;
+pub mod refine;
+pub mod sph;
+
+pub use sph::{
+    advance, cube_edge, dam_break_scene, dam_break_scene_with, measure, measure_with, run,
+    BenchArgs, BenchResult,
+};

@@ -1,0 +1,81 @@
+//! The serde types of bodies: shape, placement and kinematic motion, as scene files write them
+//! (`[container]`, `[[obstacles]]`, smoke sources, the precomputation's obstacle). The scene
+//! re-exports them; [`super::RigidBody`] is built from a [`Body`].
+
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+use crate::Real;
+
+/// A rigid body: the container or an obstacle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Name used in messages and outputs; defaults to the shape and index.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The shape, in the body's own frame.
+    pub shape: Shape,
+    /// Position of the body's origin at t = 0, m.
+    #[serde(default)]
+    pub position: [Real; 3],
+    /// Orientation at t = 0 as a rotation vector (axis times angle, radians).
+    #[serde(default)]
+    pub rotation: [Real; 3],
+    /// Kinematic motion; static when left out.
+    #[serde(default)]
+    pub motion: Motion,
+}
+
+/// Shapes, after parry3d's conventions: cylinders and capsules lie along the local y axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Shape {
+    /// A box with the given half extents, m.
+    Box { half_extents: [Real; 3] },
+    /// A sphere.
+    Sphere { radius: Real },
+    /// A cylinder along local y.
+    Cylinder { radius: Real, half_height: Real },
+    /// A capsule along local y (half_height is that of the cylindrical part).
+    Capsule { radius: Real, half_height: Real },
+    /// A closed triangle mesh from an OBJ or STL file, relative to the scene file.
+    Mesh {
+        path: PathBuf,
+        #[serde(default = "default_scale")]
+        scale: Real,
+    },
+}
+
+fn default_scale() -> Real {
+    1.0
+}
+
+/// Kinematic motion of a body: constant linear and angular velocity, or a keyframed path.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Motion {
+    /// Linear velocity, m/s.
+    #[serde(default)]
+    pub linear: [Real; 3],
+    /// Angular velocity about the body origin, rad/s.
+    #[serde(default)]
+    pub angular: [Real; 3],
+    /// Keyframes (times strictly increasing); when given they replace `linear` and `angular`.
+    /// Position is interpolated linearly, orientation by slerp; the pose is held outside the range.
+    #[serde(default)]
+    pub keyframes: Vec<Keyframe>,
+}
+
+/// A pose at a time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Keyframe {
+    /// Time, s.
+    pub t: Real,
+    /// Position of the body origin, m.
+    pub position: [Real; 3],
+    /// Orientation as a rotation vector, radians.
+    #[serde(default)]
+    pub rotation: [Real; 3],
+}

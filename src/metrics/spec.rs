@@ -1,0 +1,132 @@
+//! What a scene can ask the diagnostics for, as its `[[probes]]` and `output.metrics` write it:
+//! probes sampled every step into `probes.csv`, and the per-step metrics of `metrics.csv`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::Real;
+
+/// A coordinate axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    /// Index of the axis in a vector.
+    pub fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
+/// A probe, sampled every step into `probes.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Probe {
+    /// The fluid front: the largest coordinate along `axis` of any fluid particle, less `origin`.
+    Front {
+        name: String,
+        axis: Axis,
+        #[serde(default)]
+        origin: Real,
+    },
+    /// Pressure and velocity at a point: kernel-interpolated (Shepard-normalised) on SPH,
+    /// trilinear on the grid.
+    Point { name: String, position: [Real; 3] },
+    /// Grid only: the velocity at `points` evenly spaced samples from `from` to `to`, written
+    /// as `profile_NAME.csv` at the end of the run.
+    Line {
+        name: String,
+        from: [Real; 3],
+        to: [Real; 3],
+        #[serde(default = "default_line_points")]
+        points: usize,
+    },
+    /// Grid only: the force of the fluid on an obstacle (named by its `name`), pressure and
+    /// viscous parts, N.
+    Force { name: String, body: String },
+}
+
+fn default_line_points() -> usize {
+    65
+}
+
+impl Probe {
+    /// The probe's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Probe::Front { name, .. }
+            | Probe::Point { name, .. }
+            | Probe::Line { name, .. }
+            | Probe::Force { name, .. } => name,
+        }
+    }
+}
+
+/// Per-step metrics a scene can ask for; each is a column of `metrics.csv`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Metric {
+    KineticEnergy,
+    PotentialEnergy,
+    DensityErrorAvg,
+    DensityErrorMax,
+    MaxSpeed,
+    PressureIterations,
+    DivergenceIterations,
+    /// Rotational energy of a micropolar refinement, J (zero for other methods).
+    RotationalEnergy,
+    /// Kinetic (linear plus rotational) plus potential energy, J.
+    TotalEnergy,
+    /// Mean |curl v| over the fluid particles, 1/s.
+    VorticityMean,
+    /// Largest |curl v|, 1/s.
+    VorticityMax,
+    /// Enstrophy sum_i V |curl v_i|^2 / 2, m^3/s^2.
+    Enstrophy,
+    /// Wall-clock time of the refinement in the step, s.
+    RefinementSeconds,
+}
+
+impl Metric {
+    /// Every metric, in column order.
+    pub const ALL: [Metric; 13] = [
+        Metric::KineticEnergy,
+        Metric::PotentialEnergy,
+        Metric::DensityErrorAvg,
+        Metric::DensityErrorMax,
+        Metric::MaxSpeed,
+        Metric::PressureIterations,
+        Metric::DivergenceIterations,
+        Metric::RotationalEnergy,
+        Metric::TotalEnergy,
+        Metric::VorticityMean,
+        Metric::VorticityMax,
+        Metric::Enstrophy,
+        Metric::RefinementSeconds,
+    ];
+    /// Column name in `metrics.csv`.
+    pub fn column(self) -> &'static str {
+        match self {
+            Metric::KineticEnergy => "kinetic_energy",
+            Metric::PotentialEnergy => "potential_energy",
+            Metric::DensityErrorAvg => "density_error_avg",
+            Metric::DensityErrorMax => "density_error_max",
+            Metric::MaxSpeed => "max_speed",
+            Metric::PressureIterations => "pressure_iterations",
+            Metric::DivergenceIterations => "divergence_iterations",
+            Metric::RotationalEnergy => "rotational_energy",
+            Metric::TotalEnergy => "total_energy",
+            Metric::VorticityMean => "vorticity_mean",
+            Metric::VorticityMax => "vorticity_max",
+            Metric::Enstrophy => "enstrophy",
+            Metric::RefinementSeconds => "refinement_seconds",
+        }
+    }
+}

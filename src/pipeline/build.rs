@@ -1,0 +1,228 @@
+//! A resolved scene compiled into a [`Pipeline`]: its solvers, the stages a step runs and the
+//! outputs it writes. A stage that nothing in the scene needs is not built, so it cannot run.
+
+use std::path::Path;
+
+use super::frames::{GridFrames, Kind, ParticleFrames};
+use super::simulation::Simulation;
+use super::stages::{
+    GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
+};
+use super::RunError;
+use crate::grid::GridSolver;
+use crate::io::{AttrValue, IoError};
+use crate::metrics::Probe;
+use crate::refine;
+use crate::scene::{build, Scene};
+use crate::sph::SphSolver;
+use crate::{Real, Vec3};
+
+/// A scene ready to step: the simulation, its stages in order and its frame writers.
+pub struct Pipeline {
+    pub sim: Simulation,
+    pub stages: Vec<Box<dyn Stage>>,
+    pub frames: Frames,
+    /// Grid line probes, written as `profile_NAME.csv` at the end: (name, from, to, points).
+    pub profiles: Vec<(String, Vec3, Vec3, usize)>,
+}
+
+/// The frame writers a scene asked for, opened with [`Pipeline::open`].
+pub struct Frames {
+    /// Simulated time between frames, s.
+    pub interval: Real,
+    pub vtk: bool,
+    pub hdf5: bool,
+    attrs: Vec<(&'static str, AttrValue)>,
+    both: bool,
+    pub particles: Option<ParticleFrames>,
+    pub grid: Option<GridFrames>,
+}
+
+impl Frames {
+    /// Writes one frame of every solver.
+    pub fn write(&mut self, sim: &Simulation) -> Result<(), IoError> {
+        if let (Some(w), Some(sph)) = (self.particles.as_mut(), sim.sph.as_ref()) {
+            w.write(sph)?;
+        }
+        if let (Some(w), Some(grid)) = (self.grid.as_mut(), sim.grid.as_ref()) {
+            w.write(grid)?;
+        }
+        Ok(())
+    }
+
+    /// Frames written so far (of the kind written most: both kinds are written together).
+    pub fn count(&self) -> usize {
+        let p = self.particles.as_ref().map_or(0, |w| w.count());
+        let g = self.grid.as_ref().map_or(0, |w| w.count());
+        p.max(g)
+    }
+
+    /// The plan's lines on the frames: (name, what is written).
+    pub fn describe(&self, sim: &Simulation) -> Vec<(&'static str, String)> {
+        let mut out = Vec::new();
+        let kinds = [
+            (sim.sph.is_some(), Kind::Particles, "particles"),
+            (sim.grid.is_some(), Kind::Grid, "grid"),
+        ];
+        for (_, kind, name) in kinds.iter().filter(|k| k.0) {
+            if self.vtk {
+                out.push((
+                    "vtk",
+                    format!("VTK frames + {name}.pvd every {} s", self.interval),
+                ));
+            }
+            if self.hdf5 {
+                out.push((
+                    "hdf5",
+                    format!(
+                        "{} ({name}) every {} s",
+                        kind.file("frames.h5", self.both),
+                        self.interval
+                    ),
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// The SPH fluid of `scene` with its bodies and its refinement attached as a step hook.
+pub fn sph_solver(scene: &Scene) -> Result<SphSolver, RunError> {
+    let params = build::sph_params(scene).ok_or_else(|| {
+        RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name))
+    })?;
+    let refinement = |n| refine::hook(&scene.refinement, n, scene.seed).into_iter().collect();
+    Ok(SphSolver::with_hooks(
+        &params,
+        build::bodies(scene)?,
+        refinement,
+    ))
+}
+
+/// The MAC grid of `scene` with its obstacles.
+pub fn grid_solver(scene: &Scene) -> Result<GridSolver, RunError> {
+    let params = build::grid_params(scene).ok_or_else(|| {
+        RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name))
+    })?;
+    GridSolver::new(&params, build::bodies(scene)?).map_err(|e| RunError::Setup(Box::new(e)))
+}
+
+impl Pipeline {
+    /// Builds the solvers and stages of `scene`. Nothing is written.
+    pub fn build(scene: &Scene) -> Result<Self, RunError> {
+        let (has_sph, has_grid) = (scene.fluid.is_some(), scene.grid.is_some());
+        if !has_sph && !has_grid {
+            return Err(RunError::Unsupported(format!(
+                "scene '{}' has neither [fluid] nor [grid]: nothing to simulate",
+                scene.name
+            )));
+        }
+        let both = has_sph && has_grid;
+        let sph = has_sph.then(|| sph_solver(scene)).transpose()?;
+        let grid = has_grid.then(|| grid_solver(scene)).transpose()?;
+        let sim = Simulation::new(sph, grid);
+        let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+        let probes = &scene.probes;
+        let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
+        if sim.sph.is_some() && !probes.is_empty() {
+            stages.push(Box::new(SphProbes {
+                probes: probes.clone(),
+                file: Kind::Particles.file("probes.csv", both),
+                recorder: None,
+            }));
+        }
+        if sim.grid.is_some() && probes.iter().any(|p| per_step(&p)) {
+            let offset = usize::from(scene.container.is_some());
+            let bodies = scene
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter_map(|(i, b)| b.name.clone().map(|n| (n, i + offset)))
+                .collect();
+            stages.push(Box::new(GridProbes {
+                probes: probes.iter().filter(per_step).cloned().collect(),
+                bodies,
+                file: Kind::Grid.file("probes.csv", both),
+                recorder: None,
+            }));
+        }
+        if sim.sph.is_some() {
+            stages.push(Box::new(SphStep));
+            stages.push(Box::new(SphNeighbours));
+        }
+        if sim.grid.is_some() {
+            stages.push(Box::new(GridStep));
+        }
+        if sim.sph.is_some() && !scene.output.metrics.is_empty() {
+            stages.push(Box::new(SphMetrics {
+                metrics: scene.output.metrics.clone(),
+                gravity: Vec3::from(scene.gravity),
+                file: Kind::Particles.file("metrics.csv", both),
+                recorder: None,
+            }));
+        }
+        if sim.grid.is_some() {
+            stages.push(Box::new(GridMetrics {
+                file: Kind::Grid.file("metrics.csv", both),
+                csv: None,
+            }));
+        }
+        let profiles = probes
+            .iter()
+            .filter_map(|p| match p {
+                Probe::Line {
+                    name,
+                    from,
+                    to,
+                    points,
+                } if sim.grid.is_some() => {
+                    Some((name.clone(), Vec3::from(*from), Vec3::from(*to), *points))
+                }
+                _ => None,
+            })
+            .collect();
+        let out = &scene.output;
+        let frames = Frames {
+            interval: out.interval,
+            vtk: out.vtk,
+            hdf5: out.hdf5,
+            attrs: vec![
+                ("scene", AttrValue::Str(scene.name.clone())),
+                ("seed", AttrValue::Int(scene.seed as i64)),
+            ],
+            both,
+            particles: None,
+            grid: None,
+        };
+        Ok(Self {
+            sim,
+            stages,
+            frames,
+            profiles,
+        })
+    }
+
+    /// Creates the output files of every stage and frame writer in `out`.
+    pub fn open(&mut self, out: &Path) -> Result<(), IoError> {
+        for stage in &mut self.stages {
+            stage.open(&self.sim, out)?;
+        }
+        let f = &mut self.frames;
+        let hdf5 = |kind: Kind| f.hdf5.then(|| kind.file("frames.h5", f.both));
+        if let Some(sph) = self.sim.sph.as_ref() {
+            let name = hdf5(Kind::Particles);
+            f.particles = Some(ParticleFrames::new(
+                out,
+                f.vtk,
+                name.as_deref(),
+                &f.attrs,
+                sph,
+            )?);
+        }
+        if self.sim.grid.is_some() {
+            let name = hdf5(Kind::Grid);
+            f.grid = Some(GridFrames::new(out, f.vtk, name.as_deref(), &f.attrs)?);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,205 @@
+//! The one driver loop: frames at the output interval, the shared step, the end conditions
+//! (end time, step count, steady state), the progress bar, and the instability stop that keeps
+//! the frames written so far.
+
+use std::path::Path;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::build::Pipeline;
+use super::plan::Plan;
+use super::simulation::StepError;
+use super::stages::StepRecord;
+use super::{output_dir, RunError, RunOptions, RunSummary};
+use crate::io::{write_atomic, IoError};
+use crate::metrics::grid_probes::write_profile;
+use crate::scene::Scene;
+use crate::stepping::towards_end;
+use crate::Real;
+
+/// Times closer than this count as equal (frame times, the end time).
+const TIME_EPS: Real = 1e-12;
+
+/// When a run ends.
+struct End {
+    time: Option<Real>,
+    steps: Option<u64>,
+    /// Relative change per unit time of the grid velocity below which it is steady.
+    steady: Option<Real>,
+}
+
+/// Runs an already resolved scene into its output folder.
+pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
+    let started = Instant::now();
+    let out = output_dir(scene, options);
+    std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
+        path: out.clone(),
+        action: "creating the output folder",
+        source: e,
+    })?;
+    let resolved = scene.to_toml();
+    write_atomic(&out.join("scene.toml"), |w| {
+        w.write_all(resolved.as_bytes())
+    })?;
+    let mut p = Pipeline::build(scene).map_err(|e| match e {
+        RunError::Setup(cause) => stopped(StepError::Grid(*cause), 0, &out),
+        e => e,
+    })?;
+    p.open(&out)?;
+    let end = End {
+        time: [scene.time.end, options.until]
+            .into_iter()
+            .flatten()
+            .reduce(Real::min),
+        steps: [scene.time.steps, options.steps]
+            .into_iter()
+            .flatten()
+            .min(),
+        steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
+    };
+    let plan = Plan::of(&p);
+    let trace = drive(&mut p, &end, options, &out)?;
+    for (name, from, to, points) in &p.profiles {
+        if let Some(grid) = p.sim.grid.as_ref() {
+            let path = out.join(format!("profile_{name}.csv"));
+            write_profile(grid, &path, (*from).into(), (*to).into(), *points)?;
+        }
+    }
+    if let (Some(w), Some(grid)) = (p.frames.grid.as_ref(), p.sim.grid.as_ref()) {
+        w.write_average(grid)?;
+    }
+    let sph = p.sim.sph.as_ref();
+    Ok(RunSummary {
+        out,
+        steps: p.sim.steps(),
+        time: p.sim.time(),
+        frames: p.frames.count(),
+        fluid_particles: sph.map_or(0, |s| s.fluid.len()),
+        boundary_particles: sph.map_or(0, |s| s.boundary.len()),
+        grid_cells: p.sim.grid.as_ref().map_or(0, |g| g.mac.cell_count()),
+        wall_seconds: started.elapsed().as_secs_f64(),
+        plan,
+        trace,
+    })
+}
+
+/// Steps `p` to its end; returns the stage trace when the options ask for one.
+fn drive(
+    p: &mut Pipeline,
+    end: &End,
+    options: &RunOptions,
+    out: &Path,
+) -> Result<Vec<String>, RunError> {
+    let bar = progress_bar(options.progress, end);
+    let mut trace = Vec::new();
+    let mut next_frame = 0.0;
+    let mut steady = false;
+    loop {
+        let sim = &p.sim;
+        let done = steady
+            || end.time.is_some_and(|t| sim.time() >= t - TIME_EPS)
+            || end.steps.is_some_and(|n| sim.steps() >= n);
+        if sim.time() >= next_frame - TIME_EPS || done {
+            p.frames.write(sim)?;
+            while next_frame <= sim.time() + TIME_EPS {
+                next_frame += p.frames.interval;
+            }
+        }
+        if done {
+            break;
+        }
+        let rec = step(p, end, options.trace.then_some(&mut trace))
+            .map_err(|e| stopped(e, p.frames.count(), out))?;
+        steady = end
+            .steady
+            .zip(rec.grid)
+            .is_some_and(|(tol, g)| g.change_rate < tol);
+        update_bar(&bar, end, p, &rec);
+    }
+    bar.finish_and_clear();
+    Ok(trace)
+}
+
+/// One step: the shared dt, then every stage in order.
+fn step(
+    p: &mut Pipeline,
+    end: &End,
+    mut trace: Option<&mut Vec<String>>,
+) -> Result<StepRecord, StepError> {
+    let sim = &mut p.sim;
+    let dt = sim.stable_dt()?;
+    let dt = end.time.map_or(dt, |t| towards_end(dt, t - sim.time));
+    let mut rec = StepRecord {
+        step: sim.steps,
+        time: sim.time,
+        dt,
+        ..Default::default()
+    };
+    for stage in &mut p.stages {
+        stage.run(sim, &mut rec)?;
+        if let Some(trace) = trace.as_deref_mut() {
+            trace.push(stage.name().to_owned());
+            let parts = stage.ran(sim).iter();
+            trace.extend(parts.map(|part| format!("{}/{part}", stage.name())));
+        }
+    }
+    sim.time += dt;
+    sim.steps += 1;
+    Ok(rec)
+}
+
+/// A failed step as a run error that says how many frames were kept, and where.
+fn stopped(e: StepError, frames: usize, out: &Path) -> RunError {
+    let out = out.to_path_buf();
+    match e {
+        StepError::Sph(cause) => RunError::Unstable { cause, frames, out },
+        StepError::Grid(cause) => RunError::Grid {
+            cause: Box::new(cause),
+            frames,
+            out,
+        },
+        StepError::Io(e) => RunError::Io(e),
+    }
+}
+
+fn progress_bar(show: bool, end: &End) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = match (end.time, end.steps) {
+        (Some(_), _) => ProgressBar::new(1000),
+        (None, Some(n)) => ProgressBar::new(n),
+        (None, None) => ProgressBar::no_length(),
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn update_bar(bar: &ProgressBar, end: &End, p: &Pipeline, rec: &StepRecord) {
+    let sim = &p.sim;
+    match end.time {
+        Some(t) => bar.set_position((sim.time() / t * 1000.0).min(1000.0) as u64),
+        None => bar.set_position(sim.steps()),
+    }
+    let elapsed = bar.elapsed().as_secs_f64().max(1e-9);
+    let mut msg = format!(
+        "t = {:.4} s, step {}, dt = {:.2e} s, {:.1} steps/s",
+        sim.time(),
+        sim.steps(),
+        rec.dt,
+        sim.steps() as f64 / elapsed
+    );
+    if let Some(g) = rec.grid {
+        msg += &format!(
+            ", {} CG iterations, change {:.1e}/s",
+            g.pressure_iterations, g.change_rate
+        );
+    }
+    bar.set_message(msg);
+}

@@ -1,0 +1,212 @@
+//! Frame writers: VTK files with a ParaView `.pvd` series and one HDF5 file per kind of frame
+//! (particles, grid), written at the scene's output interval into the run's folder.
+
+use std::path::{Path, PathBuf};
+
+use crate::grid::{forces::vorticity, GridSolver};
+use crate::io::{
+    write_grid_vtk, write_particles_vtk, AttrValue, Field, GridField, GridFrame, Hdf5Frames,
+    Hdf5GridFrames, IoError, ParticleFrame, PvdSeries,
+};
+use crate::sph::SphSolver;
+
+/// Where each kind of output goes: a scene with one solver keeps the plain names
+/// (`metrics.csv`, `frames.h5`); a scene with both prefixes them by kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Particles,
+    Grid,
+}
+
+impl Kind {
+    /// The file name of an output of this kind, `base` with the kind's prefix when `both`.
+    pub fn file(self, base: &str, both: bool) -> String {
+        match (both, self) {
+            (false, _) => base.to_owned(),
+            (true, Kind::Particles) => format!("particles_{base}"),
+            (true, Kind::Grid) => format!("grid_{base}"),
+        }
+    }
+}
+
+/// The writers a scene asked for, for one kind of frame.
+struct Writers<H> {
+    out: PathBuf,
+    pvd: Option<PvdSeries>,
+    hdf5: Option<H>,
+    count: usize,
+}
+
+impl<H> Writers<H> {
+    fn any(&self) -> bool {
+        self.pvd.is_some() || self.hdf5.is_some()
+    }
+}
+
+/// The particle frame writers: `particles.pvd` with `particles_NNNNNN.vtp`, and `frames.h5`.
+pub struct ParticleFrames(Writers<Hdf5Frames>);
+
+impl ParticleFrames {
+    /// Writers into `out`; `hdf5` names the HDF5 file when the scene asked for one.
+    pub fn new(
+        out: &Path,
+        vtk: bool,
+        hdf5: Option<&str>,
+        attrs: &[(&str, AttrValue)],
+        solver: &SphSolver,
+    ) -> Result<Self, IoError> {
+        let hdf5 = hdf5
+            .map(|name| {
+                let mut all = attrs.to_vec();
+                all.extend([
+                    ("particle_spacing", AttrValue::Real(solver.spacing)),
+                    ("particle_mass", AttrValue::Real(solver.fluid.mass)),
+                    ("rest_density", AttrValue::Real(solver.fluid.rest_density)),
+                ]);
+                Hdf5Frames::create(&out.join(name), &all)
+            })
+            .transpose()?;
+        Ok(Self(Writers {
+            out: out.to_path_buf(),
+            pvd: vtk.then(|| PvdSeries::new(&out.join("particles.pvd"))),
+            hdf5,
+            count: 0,
+        }))
+    }
+
+    /// Position, velocity, density, pressure and the hooks' fields.
+    pub fn write(&mut self, solver: &SphSolver) -> Result<(), IoError> {
+        let w = &mut self.0;
+        if !w.any() {
+            return Ok(());
+        }
+        let f = &solver.fluid;
+        let mut frame = ParticleFrame {
+            step: solver.steps(),
+            time: solver.time(),
+            positions: &f.x,
+            fields: vec![
+                Field::vector("velocity", &f.v),
+                Field::scalar("density", &f.density),
+                Field::scalar("pressure", &f.pressure),
+            ],
+        };
+        let extra = solver.refinement_fields();
+        frame
+            .fields
+            .extend(extra.iter().map(|(name, data)| Field::vector(name, data)));
+        if let Some(pvd) = w.pvd.as_mut() {
+            let name = format!("particles_{:06}.vtp", w.count);
+            write_particles_vtk(&w.out.join(&name), &frame)?;
+            pvd.push(frame.time, &name)?;
+        }
+        if let Some(h5) = w.hdf5.as_mut() {
+            h5.append(&frame)?;
+        }
+        w.count += 1;
+        Ok(())
+    }
+
+    /// Frames written so far.
+    pub fn count(&self) -> usize {
+        self.0.count
+    }
+}
+
+/// The grid frame writers: `grid.pvd` with `grid_NNNNNN.vti`, and `frames.h5`.
+pub struct GridFrames(Writers<Hdf5GridFrames>);
+
+impl GridFrames {
+    /// Writers into `out`; `hdf5` names the HDF5 file when the scene asked for one.
+    pub fn new(
+        out: &Path,
+        vtk: bool,
+        hdf5: Option<&str>,
+        attrs: &[(&str, AttrValue)],
+    ) -> Result<Self, IoError> {
+        let hdf5 = hdf5
+            .map(|name| Hdf5GridFrames::create(&out.join(name), attrs))
+            .transpose()?;
+        Ok(Self(Writers {
+            out: out.to_path_buf(),
+            pvd: vtk.then(|| PvdSeries::new(&out.join("grid.pvd"))),
+            hdf5,
+            count: 0,
+        }))
+    }
+
+    /// Velocity, vorticity, pressure, smoke, temperature and the obstacle cells.
+    pub fn write(&mut self, solver: &GridSolver) -> Result<(), IoError> {
+        let w = &mut self.0;
+        if !w.any() {
+            return Ok(());
+        }
+        let vel = solver.mac.cell_velocity();
+        let omega = vorticity(&solver.mac);
+        let solid = solver
+            .bounds
+            .fluid_mask()
+            .mapv(|f| if f { 0.0 } else { 1.0 });
+        let mut fields = vec![
+            GridField::vector("velocity", [vel[0].view(), vel[1].view(), vel[2].view()]),
+            GridField::vector(
+                "vorticity",
+                [omega[0].view(), omega[1].view(), omega[2].view()],
+            ),
+            GridField::scalar("pressure", solver.pressure.view()),
+            GridField::scalar("solid", solid.view()),
+        ];
+        if let Some(smoke) = &solver.smoke {
+            fields.push(GridField::scalar("smoke", smoke.density.view()));
+            if let Some(t) = &smoke.temperature {
+                fields.push(GridField::scalar("temperature", t.view()));
+            }
+        }
+        let frame = GridFrame {
+            step: solver.steps(),
+            time: solver.time(),
+            origin: solver.mac.origin,
+            spacing: solver.mac.dx,
+            dims: solver.mac.dims,
+            fields,
+        };
+        if let Some(pvd) = w.pvd.as_mut() {
+            let name = format!("grid_{:06}.vti", w.count);
+            write_grid_vtk(&w.out.join(&name), &frame)?;
+            pvd.push(frame.time, &name)?;
+        }
+        if let Some(h5) = w.hdf5.as_mut() {
+            h5.append(&frame)?;
+        }
+        w.count += 1;
+        Ok(())
+    }
+
+    /// Frames written so far.
+    pub fn count(&self) -> usize {
+        self.0.count
+    }
+
+    /// The time-averaged velocity as `average.vti`, when the grid keeps one.
+    pub fn write_average(&self, solver: &GridSolver) -> Result<(), IoError> {
+        let Some((_, avg)) = &solver.average else {
+            return Ok(());
+        };
+        let Some(mean) = avg.mean(&solver.mac) else {
+            return Ok(());
+        };
+        let vel = mean.cell_velocity();
+        let frame = GridFrame {
+            step: solver.steps(),
+            time: solver.time(),
+            origin: mean.origin,
+            spacing: mean.dx,
+            dims: mean.dims,
+            fields: vec![GridField::vector(
+                "velocity_mean",
+                [vel[0].view(), vel[1].view(), vel[2].view()],
+            )],
+        };
+        write_grid_vtk(&self.0.out.join("average.vti"), &frame)
+    }
+}

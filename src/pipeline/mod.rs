@@ -1,0 +1,113 @@
+//! The one simulation pipeline: a resolved scene becomes a [`Simulation`] (its solvers on one
+//! clock) and a list of [`Stage`]s that run in order each step; one driver loop steps every
+//! scene to its end, writing metrics, probes and frames. `eddy run --plan` prints the
+//! [`Plan`] read from the same stage objects, and a run can record the stages it ran (the
+//! stage trace), so plan and execution cannot drift.
+//!
+//! Each step the driver asks every solver for its largest stable step, takes the smallest,
+//! shortens it to land on the end time, and runs the stages with it.
+
+mod build;
+mod driver;
+mod frames;
+mod plan;
+mod simulation;
+mod stages;
+
+use std::path::{Path, PathBuf};
+
+pub use build::{grid_solver, sph_solver, Frames, Pipeline};
+pub use driver::run_scene;
+pub use frames::{GridFrames, Kind, ParticleFrames};
+pub use plan::{Plan, PlannedStage};
+pub use simulation::{Simulation, StepError};
+pub use stages::{Stage, StepRecord};
+
+use crate::geometry::GeometryError;
+use crate::grid::GridError;
+use crate::io::IoError;
+use crate::scene::{self, Scene, SceneError};
+use crate::sph::Instability;
+use crate::Real;
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    #[error(transparent)]
+    Io(#[from] IoError),
+    #[error(transparent)]
+    Setup(Box<GridError>),
+    #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
+    Unstable {
+        cause: Instability,
+        frames: usize,
+        out: PathBuf,
+    },
+    #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
+    Grid {
+        cause: Box<GridError>,
+        frames: usize,
+        out: PathBuf,
+    },
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Command-line choices that are not part of the scene.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output folder, overriding `output.dir`.
+    pub out: Option<PathBuf>,
+    /// `dotted.key=value` overrides, applied in order.
+    pub overrides: Vec<String>,
+    /// Stop at this simulated time if it comes before the scene's end.
+    pub until: Option<Real>,
+    /// Stop after this many steps if they come before the scene's end.
+    pub steps: Option<u64>,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// Record the stage trace in the summary (see [`Plan::step_trace`]).
+    pub trace: bool,
+}
+
+/// What a finished run did.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub out: PathBuf,
+    pub steps: u64,
+    pub time: Real,
+    pub frames: usize,
+    pub fluid_particles: usize,
+    pub boundary_particles: usize,
+    /// Cells of the grid (0 without one).
+    pub grid_cells: usize,
+    pub wall_seconds: f64,
+    /// The plan the run was built with.
+    pub plan: Plan,
+    /// With [`RunOptions::trace`], every stage and part in the order they ran.
+    pub trace: Vec<String>,
+}
+
+/// Loads `path` with the options' overrides, ready to run.
+pub fn resolve(path: &Path, options: &RunOptions) -> Result<Scene, RunError> {
+    Ok(scene::load(path, &options.overrides)?)
+}
+
+/// The output folder of a scene under these options.
+pub fn output_dir(scene: &Scene, options: &RunOptions) -> PathBuf {
+    options
+        .out
+        .clone()
+        .or_else(|| scene.output.dir.clone())
+        .unwrap_or_else(|| Path::new("out").join(&scene.name))
+}
+
+/// Runs the scene at `path`.
+pub fn run(path: &Path, options: &RunOptions) -> Result<RunSummary, RunError> {
+    let scene = resolve(path, options)?;
+    run_scene(&scene, options)
+}

@@ -1,0 +1,105 @@
+//! The plan of a run, printed by `eddy run --plan`: read from the built stages and writers
+//! themselves, so it lists exactly what runs.
+
+use std::fmt;
+
+use super::build::Pipeline;
+
+/// One stage of a step, with the parts it runs inside.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PlannedStage {
+    pub name: &'static str,
+    pub detail: String,
+    pub parts: Vec<(&'static str, String)>,
+}
+
+/// The stages of a step in order, what is written at frame times, and how the solvers share
+/// the clock.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Plan {
+    pub stages: Vec<PlannedStage>,
+    pub outputs: Vec<(&'static str, String)>,
+    pub clock: String,
+}
+
+impl Plan {
+    /// The plan of a built pipeline.
+    pub fn of(p: &Pipeline) -> Self {
+        let stages = p
+            .stages
+            .iter()
+            .map(|s| {
+                let (detail, parts) = s.describe(&p.sim);
+                PlannedStage {
+                    name: s.name(),
+                    detail,
+                    parts,
+                }
+            })
+            .collect();
+        let mut outputs = p.frames.describe(&p.sim);
+        outputs.extend(p.profiles.iter().map(|(name, ..)| {
+            (
+                "profile",
+                format!("profile_{name}.csv: grid velocity along a line, at the end"),
+            )
+        }));
+        if p.sim.grid.as_ref().is_some_and(|g| g.average.is_some()) {
+            outputs.push((
+                "average",
+                "average.vti: the time-averaged grid velocity, at the end".into(),
+            ));
+        }
+        let clock = match (p.sim.sph.is_some(), p.sim.grid.is_some()) {
+            (true, true) => "one dt for both solvers, the smaller of their stable steps; no \
+                             exchange between the grid and the SPH fluid yet (each moves in its \
+                             own part of the scene)"
+                .to_owned(),
+            _ => "dt from the solver's stable step (CFL or fixed), the last steps shortened to \
+                  land on the end time"
+                .to_owned(),
+        };
+        Plan {
+            stages,
+            outputs,
+            clock,
+        }
+    }
+
+    /// What one step records in the stage trace: each stage's name, then `name/part` for each
+    /// of its parts, in order.
+    pub fn step_trace(&self) -> Vec<String> {
+        self.stages
+            .iter()
+            .flat_map(|s| {
+                std::iter::once(s.name.to_owned())
+                    .chain(s.parts.iter().map(|(part, _)| format!("{}/{part}", s.name)))
+            })
+            .collect()
+    }
+
+    /// True when a step runs a stage of this name.
+    pub fn has(&self, name: &str) -> bool {
+        self.stages.iter().any(|s| s.name == name)
+    }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "clock: {}", self.clock)?;
+        writeln!(f, "each step, in order:")?;
+        for (i, s) in self.stages.iter().enumerate() {
+            writeln!(f, "{:>3}. {:<11} {}", i + 1, s.name, s.detail)?;
+            for (part, detail) in &s.parts {
+                writeln!(f, "       - {part:<11} {detail}")?;
+            }
+        }
+        if !self.outputs.is_empty() {
+            writeln!(f, "outputs:")?;
+            for (name, detail) in &self.outputs {
+                writeln!(f, "     - {name:<11} {detail}")?;
+            }
+        }
+        Ok(())
+    }
+}

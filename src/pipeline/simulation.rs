@@ -1,0 +1,76 @@
+//! What a scene simulates: its solvers, stepped on one clock.
+
+use crate::grid::{GridError, GridSolver};
+use crate::io::IoError;
+use crate::sph::{Instability, SphSolver};
+use crate::Real;
+
+/// Why a step could not be taken.
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    #[error(transparent)]
+    Sph(#[from] Instability),
+    #[error(transparent)]
+    Grid(#[from] GridError),
+    #[error(transparent)]
+    Io(#[from] IoError),
+}
+
+/// The solvers of a scene and the one clock they share. Each solver keeps its own copy of the
+/// time (its moving bodies read it); every step advances all of them by the same `dt`.
+pub struct Simulation {
+    /// The SPH fluid, when the scene has a `[fluid]`.
+    pub sph: Option<SphSolver>,
+    /// The MAC-grid fluid, when the scene has a `[grid]`.
+    pub grid: Option<GridSolver>,
+    pub(super) time: Real,
+    pub(super) steps: u64,
+}
+
+impl Simulation {
+    /// The solvers at t = 0.
+    pub fn new(sph: Option<SphSolver>, grid: Option<GridSolver>) -> Self {
+        Self {
+            sph,
+            grid,
+            time: 0.0,
+            steps: 0,
+        }
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> Real {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The step every solver can take now: the smallest of their stable steps.
+    pub fn stable_dt(&mut self) -> Result<Real, StepError> {
+        let mut dt = Real::INFINITY;
+        if let Some(sph) = self.sph.as_mut() {
+            dt = dt.min(sph.stable_dt()?);
+        }
+        if let Some(grid) = self.grid.as_ref() {
+            dt = dt.min(grid.stable_dt()?);
+        }
+        Ok(dt)
+    }
+
+    /// The SPH fluid; only stages built for one call this.
+    pub(super) fn sph(&mut self) -> &mut SphSolver {
+        self.sph
+            .as_mut()
+            .expect("SPH stages are built only for a scene with a fluid")
+    }
+
+    /// The grid; only stages built for one call this.
+    pub(super) fn grid(&mut self) -> &mut GridSolver {
+        self.grid
+            .as_mut()
+            .expect("grid stages are built only for a scene with a grid")
+    }
+}

@@ -1,0 +1,297 @@
+//! The stages a step runs, in order: each is an object built from the scene only when the
+//! scene needs it, and the plan is printed from the same objects (see `super::plan`).
+
+use std::path::Path;
+
+use super::simulation::{Simulation, StepError};
+use crate::grid::GridStepStats;
+use crate::io::{CsvSeries, IoError};
+use crate::metrics::series::StateMetrics;
+use crate::metrics::{GridProbeRecorder, Metric, MetricsRecorder, Probe, ProbeRecorder};
+use crate::sph::StepStats;
+use crate::{Real, Vec3};
+
+/// What the stages of one step share: the clock and what the solvers reported.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepRecord {
+    /// The step's index and start time.
+    pub step: u64,
+    pub time: Real,
+    /// The step size every solver advances by.
+    pub dt: Real,
+    pub sph: Option<StepStats>,
+    pub grid: Option<GridStepStats>,
+}
+
+/// One stage of a step.
+pub trait Stage {
+    /// Short name, for the plan and the stage trace.
+    fn name(&self) -> &'static str;
+
+    /// What it does in this scene, and the parts it runs inside, in order.
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>);
+
+    /// Creates its output files in `out`, before the first step.
+    fn open(&mut self, _sim: &Simulation, _out: &Path) -> Result<(), IoError> {
+        Ok(())
+    }
+
+    /// Runs it for the step in `rec`.
+    fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError>;
+
+    /// The parts its last run ran, named as [`Stage::describe`] names them.
+    fn ran<'a>(&self, _sim: &'a Simulation) -> &'a [&'static str] {
+        &[]
+    }
+}
+
+/// The SPH step over the shared `dt`: divergence solve, hooks, forces, pressure, positions.
+pub struct SphStep;
+
+impl Stage for SphStep {
+    fn name(&self) -> &'static str {
+        "sph"
+    }
+
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
+        (sph.summary(), sph.describe())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
+        rec.sph = Some(sim.sph().advance(rec.dt)?);
+        Ok(())
+    }
+
+    fn ran<'a>(&self, sim: &'a Simulation) -> &'a [&'static str] {
+        sim.sph.as_ref().map_or(&[], |s| s.ran())
+    }
+}
+
+/// The SPH neighbourhood of the new positions: sort, neighbour lists, densities.
+pub struct SphNeighbours;
+
+impl Stage for SphNeighbours {
+    fn name(&self) -> &'static str {
+        "neighbours"
+    }
+
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
+        (sph.describe_neighbourhood(), Vec::new())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, _rec: &mut StepRecord) -> Result<(), StepError> {
+        sim.sph().update_neighborhoods();
+        Ok(())
+    }
+}
+
+/// The MAC-grid step over the shared `dt`.
+pub struct GridStep;
+
+impl Stage for GridStep {
+    fn name(&self) -> &'static str {
+        "grid"
+    }
+
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let grid = sim.grid.as_ref().expect("a grid stage has a grid");
+        (grid.summary(), grid.describe())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
+        rec.grid = Some(sim.grid().advance(rec.dt)?);
+        Ok(())
+    }
+
+    fn ran<'a>(&self, sim: &'a Simulation) -> &'a [&'static str] {
+        sim.grid.as_ref().map_or(&[], |g| g.ran())
+    }
+}
+
+/// Probes of an SPH fluid at the start of each step, into `probes.csv`.
+pub struct SphProbes {
+    pub probes: Vec<Probe>,
+    pub file: String,
+    pub recorder: Option<ProbeRecorder>,
+}
+
+impl Stage for SphProbes {
+    fn name(&self) -> &'static str {
+        "probes"
+    }
+
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        (probe_line(&self.file, &self.probes), Vec::new())
+    }
+
+    fn open(&mut self, _sim: &Simulation, out: &Path) -> Result<(), IoError> {
+        self.recorder = Some(ProbeRecorder::create(&out.join(&self.file), &self.probes)?);
+        Ok(())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, _rec: &mut StepRecord) -> Result<(), StepError> {
+        if let Some(r) = self.recorder.as_mut() {
+            r.record(sim.sph())?;
+        }
+        Ok(())
+    }
+}
+
+/// Point and force probes of a grid at the start of each step, into `probes.csv`.
+pub struct GridProbes {
+    pub probes: Vec<Probe>,
+    /// The index among the grid's bodies of each obstacle name a force probe may name.
+    pub bodies: Vec<(String, usize)>,
+    pub file: String,
+    pub recorder: Option<GridProbeRecorder>,
+}
+
+impl Stage for GridProbes {
+    fn name(&self) -> &'static str {
+        "probes"
+    }
+
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        (probe_line(&self.file, &self.probes), Vec::new())
+    }
+
+    fn open(&mut self, _sim: &Simulation, out: &Path) -> Result<(), IoError> {
+        let index = |name: &str| {
+            self.bodies
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|&(_, i)| i)
+        };
+        self.recorder = Some(GridProbeRecorder::create(
+            &out.join(&self.file),
+            &self.probes,
+            index,
+        )?);
+        Ok(())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, _rec: &mut StepRecord) -> Result<(), StepError> {
+        if let Some(r) = self.recorder.as_mut() {
+            r.record(sim.grid())?;
+        }
+        Ok(())
+    }
+}
+
+fn probe_line(file: &str, probes: &[Probe]) -> String {
+    let names: Vec<_> = probes.iter().map(|p| p.name()).collect();
+    format!("{file}: {}", names.join(", "))
+}
+
+/// The SPH row of each step: the state the step started from and what the step did. It runs
+/// after the step and keeps the state it measures for the next row.
+pub struct SphMetrics {
+    pub metrics: Vec<Metric>,
+    pub gravity: Vec3,
+    pub file: String,
+    pub recorder: Option<(MetricsRecorder, StateMetrics)>,
+}
+
+impl Stage for SphMetrics {
+    fn name(&self) -> &'static str {
+        "metrics"
+    }
+
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let names: Vec<_> = self.metrics.iter().map(|m| m.column()).collect();
+        (
+            format!(
+                "{}: {} (state at the start of each step)",
+                self.file,
+                names.join(", ")
+            ),
+            Vec::new(),
+        )
+    }
+
+    fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
+        let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics)?;
+        let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
+        let state = recorder.measure(sph, &self.gravity);
+        self.recorder = Some((recorder, state));
+        Ok(())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
+        let (Some((recorder, state)), Some(stats)) = (self.recorder.as_mut(), rec.sph) else {
+            return Ok(());
+        };
+        recorder.write(rec.step, rec.time, state, &stats)?;
+        *state = recorder.measure(sim.sph(), &self.gravity);
+        Ok(())
+    }
+}
+
+/// Columns of a grid's metrics after step, time and dt.
+const GRID_METRICS: [&str; 10] = [
+    "kinetic_energy",
+    "max_divergence",
+    "pressure_iterations",
+    "pressure_residual",
+    "viscosity_iterations",
+    "cfl",
+    "change_rate",
+    "advect_seconds",
+    "project_seconds",
+    "step_seconds",
+];
+
+/// The grid row of each step: what the step did and the kinetic energy it ended with.
+pub struct GridMetrics {
+    pub file: String,
+    pub csv: Option<CsvSeries>,
+}
+
+impl Stage for GridMetrics {
+    fn name(&self) -> &'static str {
+        "metrics"
+    }
+
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        (
+            format!(
+                "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
+                 change rate, stage times",
+                self.file
+            ),
+            Vec::new(),
+        )
+    }
+
+    fn open(&mut self, _sim: &Simulation, out: &Path) -> Result<(), IoError> {
+        let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
+        columns.extend(GRID_METRICS.map(String::from));
+        self.csv = Some(CsvSeries::create(&out.join(&self.file), &columns)?);
+        Ok(())
+    }
+
+    fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
+        let (Some(csv), Some(s)) = (self.csv.as_mut(), rec.grid) else {
+            return Ok(());
+        };
+        let energy = sim.grid().kinetic_energy();
+        csv.row(&[
+            rec.step as Real,
+            rec.time,
+            s.dt,
+            energy,
+            s.max_divergence,
+            s.pressure_iterations as Real,
+            s.pressure_residual,
+            s.viscosity_iterations as Real,
+            s.cfl,
+            s.change_rate,
+            s.advect_seconds,
+            s.project_seconds,
+            s.total_seconds,
+        ])?;
+        Ok(())
+    }
+}

@@ -1,0 +1,75 @@
+//! The one place that turns a resolved [`Scene`] into the parts' own parameters: the solvers,
+//! the bodies and the refinement never read a scene.
+
+use super::Scene;
+use crate::geometry::{GeometryError, RigidBody};
+use crate::grid::poisson::SolverSettings;
+use crate::grid::GridParams;
+use crate::sph::SphParams;
+use crate::stepping::StepLimits;
+use crate::Vec3;
+
+/// The bodies of a scene: the container first, then the obstacles.
+pub fn bodies(scene: &Scene) -> Result<Vec<RigidBody>, GeometryError> {
+    scene
+        .container
+        .iter()
+        .chain(&scene.obstacles)
+        .enumerate()
+        .map(|(i, b)| RigidBody::from_scene(b, i))
+        .collect()
+}
+
+/// The step limits of `[time]`, shared by every solver of the scene.
+pub fn step_limits(scene: &Scene) -> StepLimits {
+    let t = &scene.time;
+    StepLimits {
+        cfl: t.cfl,
+        dt_min: t.dt_min,
+        dt_max: t.dt_max,
+        fixed_dt: t.dt,
+    }
+}
+
+/// The SPH fluid's parameters, when the scene has a `[fluid]`.
+pub fn sph_params(scene: &Scene) -> Option<SphParams> {
+    let fluid = scene.fluid.as_ref()?;
+    Some(SphParams {
+        spacing: fluid.spacing,
+        rest_density: fluid.density,
+        blocks: fluid.blocks.clone(),
+        gravity: Vec3::from(scene.gravity),
+        pressure: scene.pressure.clone(),
+        viscosity: scene.viscosity.clone(),
+        limits: step_limits(scene),
+        domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
+        container: scene.container.is_some(),
+    })
+}
+
+/// The MAC grid's parameters, when the scene has a `[grid]`: it covers the scene's domain.
+pub fn grid_params(scene: &Scene) -> Option<GridParams> {
+    let grid = scene.grid.as_ref()?;
+    Some(GridParams {
+        resolution: grid.resolution,
+        dx: grid.spacing(scene),
+        origin: Vec3::from(scene.domain.min),
+        initial_velocity: Vec3::from(grid.initial_velocity),
+        sides: grid.boundary.sides(),
+        advection: grid.advection,
+        reflection: grid.reflection,
+        viscosity_scheme: grid.viscosity_scheme,
+        viscosity: scene.viscosity.kinematic,
+        density: grid.density,
+        confinement: grid.vorticity_confinement,
+        gravity: Vec3::from(scene.gravity),
+        gravity_force: grid.gravity,
+        limits: step_limits(scene),
+        pressure: SolverSettings {
+            tolerance: grid.pressure_tolerance,
+            max_iterations: grid.pressure_max_iterations as usize,
+        },
+        smoke: grid.smoke.clone(),
+        average_from: grid.average_from,
+    })
+}

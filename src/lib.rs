@@ -15,6 +15,7 @@ pub mod parallel;
 pub mod pipeline;
 pub mod refine;
 pub mod scene;
+pub mod spatial;
 pub mod sph;
 pub mod stepping;
 pub mod vortex;
@@ -25,3 +26,5 @@ pub type Real = f64;
 pub type Vec3 = nalgebra::Vector3<Real>;
 /// A 3D point of [`Real`].
 pub type Point3 = nalgebra::Point3<Real>;
+/// A 3 x 3 matrix of [`Real`]; velocity gradients have entry [a][b] = d u_a / d x_b.
+pub type Mat3 = nalgebra::Matrix3<Real>;

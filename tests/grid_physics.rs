@@ -246,7 +246,10 @@ fn bad_grid_input_is_reported() {
         rotation: [0.0; 3],
         motion: Default::default(),
     });
-    match GridSolver::new(&grid_params(&s).expect("a grid"), bodies(&s).expect("bodies")) {
+    match GridSolver::new(
+        &grid_params(&s).expect("a grid"),
+        bodies(&s).expect("bodies"),
+    ) {
         Err(e @ GridError::NoFluid { .. }) => {
             let msg = e.to_string();
             assert!(

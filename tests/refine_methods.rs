@@ -2,8 +2,8 @@
 //! own sense and by no more than it lost; zero parameters leave DFSPH and IISPH unchanged; bad
 //! parameters give clear errors.
 
-use eddy::refine::{self, StepContext};
 use eddy::pipeline::sph_solver;
+use eddy::refine::{self, StepContext};
 use eddy::scene::{self, Refinement, Scene};
 use eddy::sph::operators::{volumes, Operators, WallField};
 use eddy::sph::SphSolver;

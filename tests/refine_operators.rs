@@ -2,9 +2,9 @@
 //! and accuracy, the walls switch, the sense of single vortices, the Monte Carlo
 //! Biot–Savart estimator's bias and variance, and the treecode's error.
 
+use eddy::pipeline::sph_solver;
 use eddy::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use eddy::refine::{mcvsph, rankine, vrsph};
-use eddy::pipeline::sph_solver;
 use eddy::scene::{self, Scene};
 use eddy::sph::lanes::F4;
 use eddy::sph::neighbors::cell_order;

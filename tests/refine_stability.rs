@@ -33,7 +33,8 @@ fn run(overrides: &[String], steps: u64) -> Result<Trace, String> {
         let mut s = sph_solver(&scene).map_err(|e| e.to_string())?;
         let mut kinetic = Vec::new();
         for step in 0..steps {
-            s.step(scene.time.end).map_err(|e| format!("{overrides:?}: {e}"))?;
+            s.step(scene.time.end)
+                .map_err(|e| format!("{overrides:?}: {e}"))?;
             kinetic.push(metrics::kinetic_energy(s.fluid.mass, &s.fluid.v));
             if step % 50 == 0 || step + 1 == steps {
                 let tank = [0.5, 0.4, 0.1];

@@ -10,11 +10,11 @@
 //! gradient, the fields at j) and only adds it up. No arithmetic, however fast, takes a pass
 //! below its floor, so the floors summed over a method's passes bound its overhead from below.
 
+use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
+use crate::pipeline::{sph_solver, RunError};
 use crate::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use crate::refine::mcvsph::sample_indices;
 use crate::refine::vrsph::{stream_function, stream_strength};
-use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
-use crate::pipeline::{sph_solver, RunError};
 use crate::scene::PressureSolverKind;
 use crate::sph::lanes::F4;
 use crate::sph::neighbors::NeighborLists;

@@ -8,9 +8,9 @@ use rayon::prelude::*;
 
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
 use super::mac::{cells_beside_face, MacGrid};
+use super::params::GridSide;
 use super::poisson::{Boundary, CellKind, Side};
 use crate::geometry::RigidBody;
-use super::params::GridSide;
 use crate::{Point3, Real, Vec3};
 
 /// Owner value of a cell no obstacle covers.

@@ -12,8 +12,8 @@ pub mod forces;
 pub mod interp;
 mod layout;
 pub mod mac;
-pub mod params;
 mod multigrid;
+pub mod params;
 mod pcg;
 pub mod poisson;
 pub mod project;
@@ -28,7 +28,9 @@ pub use boundary::Boundaries;
 pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, DiffusionSystem};
 pub use interp::Stagger;
 pub use mac::MacGrid;
-pub use params::{Advection, GridBoundary, GridParams, GridSide, Smoke, SmokeSource, ViscosityScheme};
+pub use params::{
+    Advection, GridBoundary, GridParams, GridSide, Smoke, SmokeSource, ViscosityScheme,
+};
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,
 };

@@ -12,13 +12,13 @@ use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, buoyancy, confinement};
 use super::mac::MacGrid;
+use super::params::{Advection, GridParams, Smoke, SmokeSource};
 use super::poisson::{CellKind, PoissonSystem, SolveError};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
+use crate::geometry::{Body, Motion};
 use crate::geometry::{GeometryError, RigidBody};
 use crate::parallel::BLOCK;
-use super::params::{Advection, GridParams, Smoke, SmokeSource};
-use crate::geometry::{Body, Motion};
 use crate::stepping::towards_end;
 use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
@@ -566,7 +566,11 @@ impl GridSolver {
         if !speed.is_finite() {
             return Err(unstable("a face velocity is not finite".into()));
         }
-        let dt = self.params.limits.fixed_dt.unwrap_or(self.params.limits.dt_max);
+        let dt = self
+            .params
+            .limits
+            .fixed_dt
+            .unwrap_or(self.params.limits.dt_max);
         if speed * dt / self.mac.dx > CFL_BLOWUP {
             return Err(unstable(format!(
                 "speed {speed:.3e} m/s would cross {CFL_BLOWUP} cells per step"

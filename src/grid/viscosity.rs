@@ -13,8 +13,8 @@ use ndarray::{Array3, Axis, Slice, Zip};
 
 use super::boundary::Boundaries;
 use super::diffusion::{DiffusionBoundary, DiffusionSystem};
-use super::poisson::{SolveError, SolveStats, SolverSettings};
 use super::params::ViscosityScheme;
+use super::poisson::{SolveError, SolveStats, SolverSettings};
 use crate::Real;
 
 /// Diffuses component `c` of the faces over one step, a = nu dt / dx^2, with the fixed faces

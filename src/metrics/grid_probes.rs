@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use crate::io::{CsvSeries, IoError};
 use super::spec::Probe;
+use crate::io::{CsvSeries, IoError};
 use crate::{Point3, Real, Vec3};
 
 use crate::grid::GridSolver;

@@ -11,8 +11,8 @@ use rayon::prelude::*;
 
 pub use grid_probes::GridProbeRecorder;
 pub use probes::ProbeRecorder;
-pub use spec::{Axis, Metric, Probe};
 pub use series::MetricsRecorder;
+pub use spec::{Axis, Metric, Probe};
 
 /// Kinetic energy sum_i m |v_i|^2 / 2, J.
 pub fn kinetic_energy(mass: Real, v: &[Vec3]) -> Real {

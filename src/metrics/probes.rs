@@ -1,8 +1,8 @@
 //! Probes declared in the scene, written to `probes.csv` one row per step: the fluid front along
 //! an axis, and pressure and velocity at a point.
 
-use crate::io::{CsvSeries, IoError};
 use super::spec::Probe;
+use crate::io::{CsvSeries, IoError};
 use crate::sph::SphSolver;
 use crate::{Real, Vec3};
 use std::path::Path;

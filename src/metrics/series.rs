@@ -1,7 +1,7 @@
 //! `metrics.csv`: step, time, dt and the metrics the scene asks for, one row per step.
 
-use crate::io::{CsvSeries, IoError};
 use super::spec::Metric;
+use crate::io::{CsvSeries, IoError};
 use crate::sph::{SphSolver, StepStats};
 use crate::{Real, Vec3};
 use std::path::Path;

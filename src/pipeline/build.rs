@@ -4,9 +4,10 @@
 use std::path::Path;
 
 use super::frames::{GridFrames, Kind, ParticleFrames};
-use super::simulation::Simulation;
+use super::simulation::{Simulation, StepError};
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
+    StepRecord,
 };
 use super::RunError;
 use crate::grid::GridSolver;
@@ -15,6 +16,7 @@ use crate::metrics::Probe;
 use crate::refine;
 use crate::scene::{build, Scene};
 use crate::sph::SphSolver;
+use crate::stepping::towards_end;
 use crate::{Real, Vec3};
 
 /// A scene ready to step: the simulation, its stages in order and its frame writers.
@@ -88,10 +90,13 @@ impl Frames {
 
 /// The SPH fluid of `scene` with its bodies and its refinement attached as a step hook.
 pub fn sph_solver(scene: &Scene) -> Result<SphSolver, RunError> {
-    let params = build::sph_params(scene).ok_or_else(|| {
-        RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name))
-    })?;
-    let refinement = |n| refine::hook(&scene.refinement, n, scene.seed).into_iter().collect();
+    let params = build::sph_params(scene)
+        .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name)))?;
+    let refinement = |n| {
+        refine::hook(&scene.refinement, n, scene.seed)
+            .into_iter()
+            .collect()
+    };
     Ok(SphSolver::with_hooks(
         &params,
         build::bodies(scene)?,
@@ -101,9 +106,8 @@ pub fn sph_solver(scene: &Scene) -> Result<SphSolver, RunError> {
 
 /// The MAC grid of `scene` with its obstacles.
 pub fn grid_solver(scene: &Scene) -> Result<GridSolver, RunError> {
-    let params = build::grid_params(scene).ok_or_else(|| {
-        RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name))
-    })?;
+    let params = build::grid_params(scene)
+        .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name)))?;
     GridSolver::new(&params, build::bodies(scene)?).map_err(|e| RunError::Setup(Box::new(e)))
 }
 
@@ -200,6 +204,36 @@ impl Pipeline {
             frames,
             profiles,
         })
+    }
+
+    /// One step: every solver's stable step, the smallest of them shortened to land on `end`,
+    /// then every stage in order with it. With `trace`, appends each stage's name and then
+    /// `name/part` for each part it ran.
+    pub fn step(
+        &mut self,
+        end: Option<Real>,
+        mut trace: Option<&mut Vec<String>>,
+    ) -> Result<StepRecord, StepError> {
+        let sim = &mut self.sim;
+        let dt = sim.stable_dt()?;
+        let dt = end.map_or(dt, |t| towards_end(dt, t - sim.time));
+        let mut rec = StepRecord {
+            step: sim.steps,
+            time: sim.time,
+            dt,
+            ..Default::default()
+        };
+        for stage in &mut self.stages {
+            stage.run(sim, &mut rec)?;
+            if let Some(trace) = trace.as_deref_mut() {
+                trace.push(stage.name().to_owned());
+                let parts = stage.ran(sim).iter();
+                trace.extend(parts.map(|part| format!("{}/{part}", stage.name())));
+            }
+        }
+        sim.time += dt;
+        sim.steps += 1;
+        Ok(rec)
     }
 
     /// Creates the output files of every stage and frame writer in `out`.

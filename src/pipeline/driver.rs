@@ -15,7 +15,6 @@ use super::{output_dir, RunError, RunOptions, RunSummary};
 use crate::io::{write_atomic, IoError};
 use crate::metrics::grid_probes::write_profile;
 use crate::scene::Scene;
-use crate::stepping::towards_end;
 use crate::Real;
 
 /// Times closer than this count as equal (frame times, the end time).
@@ -109,7 +108,8 @@ fn drive(
         if done {
             break;
         }
-        let rec = step(p, end, options.trace.then_some(&mut trace))
+        let rec = p
+            .step(end.time, options.trace.then_some(&mut trace))
             .map_err(|e| stopped(e, p.frames.count(), out))?;
         steady = end
             .steady
@@ -119,34 +119,6 @@ fn drive(
     }
     bar.finish_and_clear();
     Ok(trace)
-}
-
-/// One step: the shared dt, then every stage in order.
-fn step(
-    p: &mut Pipeline,
-    end: &End,
-    mut trace: Option<&mut Vec<String>>,
-) -> Result<StepRecord, StepError> {
-    let sim = &mut p.sim;
-    let dt = sim.stable_dt()?;
-    let dt = end.time.map_or(dt, |t| towards_end(dt, t - sim.time));
-    let mut rec = StepRecord {
-        step: sim.steps,
-        time: sim.time,
-        dt,
-        ..Default::default()
-    };
-    for stage in &mut p.stages {
-        stage.run(sim, &mut rec)?;
-        if let Some(trace) = trace.as_deref_mut() {
-            trace.push(stage.name().to_owned());
-            let parts = stage.ran(sim).iter();
-            trace.extend(parts.map(|part| format!("{}/{part}", stage.name())));
-        }
-    }
-    sim.time += dt;
-    sim.steps += 1;
-    Ok(rec)
 }
 
 /// A failed step as a run error that says how many frames were kept, and where.

@@ -158,12 +158,7 @@ impl Stage for GridProbes {
     }
 
     fn open(&mut self, _sim: &Simulation, out: &Path) -> Result<(), IoError> {
-        let index = |name: &str| {
-            self.bodies
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|&(_, i)| i)
-        };
+        let index = |name: &str| self.bodies.iter().find(|(n, _)| n == name).map(|&(_, i)| i);
         self.recorder = Some(GridProbeRecorder::create(
             &out.join(&self.file),
             &self.probes,

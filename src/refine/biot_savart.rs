@@ -33,7 +33,7 @@
 //! theta -> 0 (at theta = 0 every pair is direct); `tests/refine_operators.rs` checks both.
 
 use super::clusters::{bounds, Clusters};
-use crate::sph::operators::Mat3;
+use crate::Mat3;
 use crate::{Real, Vec3};
 use nalgebra::Vector3;
 use rayon::prelude::*;

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::validate::{Checker, Interval};
-pub use crate::grid::{Advection, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 use super::{Scene, SceneError, Shape};
+pub use crate::grid::{Advection, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 use crate::Real;
 
 /// Largest number of cells: 1024^3 would need 25 GiB for the velocity alone.
@@ -212,18 +212,19 @@ impl Scene {
                 }
             }
         }
-        if self.refinement != super::Refinement::None {
+        if self.refinement != super::Refinement::None && self.fluid.is_none() {
             return Err(c.invalid(
                 "refinement.method",
                 format!("{:?}", self.refinement.method()),
-                "\"none\" in a grid scene (the refinements act on SPH particles)",
+                "\"none\" in a grid scene without [fluid] (the refinements act on SPH particles)",
             ));
         }
-        if self.fluid.is_some() {
+        if self.fluid.is_some() && !self.probes.is_empty() {
             return Err(c.invalid(
-                "grid",
-                "a grid and an SPH fluid in one scene",
-                "one of `[grid]` and `[fluid]` (coupled scenes come with the vortex layer)",
+                "probes",
+                format!("{} probes", self.probes.len()),
+                "none in a scene with both [grid] and [fluid] yet (a probe would not say which \
+                 solver it samples)",
             ));
         }
         Ok(())

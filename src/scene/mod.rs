@@ -9,9 +9,9 @@ pub mod overrides;
 pub mod schema;
 pub mod validate;
 
+pub use crate::refine::Refinement;
 pub use error::SceneError;
 pub use grid::{Advection, Grid, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 pub use load::{load, parse_str};
 pub use overrides::apply_override;
-pub use crate::refine::Refinement;
 pub use schema::*;

@@ -26,8 +26,7 @@ use super::neighborhood::Neighborhood;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
-/// A 3 x 3 matrix of [`Real`] (velocity gradients).
-pub type Mat3 = nalgebra::Matrix3<Real>;
+use crate::Mat3;
 
 /// What the boundary samples hold in an operator's sums when walls take part.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -22,7 +22,8 @@
 //! **Walls.** Boundary samples enter as in [`Operators`], summed in f64 (they are few).
 
 use super::lanes::{CrossSum, F4};
-use super::operators::{Mat3, Operators, WallField};
+use super::operators::{Operators, WallField};
+use crate::Mat3;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 

@@ -278,15 +278,16 @@ impl SphSolver {
             None => self.non_pressure_accelerations(),
         };
         let limits = &self.params.limits;
-        let dt = step_size(limits, self.spacing, &self.fluid.v, &accel).map_err(
-            |(needed, speed)| Instability::CflLimit {
-                time: self.time,
-                step: self.step,
-                needed,
-                dt_min: limits.dt_min,
-                speed,
-            },
-        )?;
+        let dt =
+            step_size(limits, self.spacing, &self.fluid.v, &accel).map_err(|(needed, speed)| {
+                Instability::CflLimit {
+                    time: self.time,
+                    step: self.step,
+                    needed,
+                    dt_min: limits.dt_min,
+                    speed,
+                }
+            })?;
         self.pending_accel = Some(accel);
         Ok(dt)
     }

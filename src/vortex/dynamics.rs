@@ -9,8 +9,8 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::spatial::PointHash;
 use super::{kernel, VelocitySource, VortexError, VortexParticles};
+use crate::spatial::PointHash;
 use crate::{Real, Vec3};
 
 /// Parameters of the energy dynamics.

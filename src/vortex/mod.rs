@@ -9,7 +9,6 @@
 pub mod dynamics;
 pub mod kernel;
 pub mod particles;
-mod spatial;
 pub mod synthesis;
 
 pub use dynamics::{Dynamics, DynamicsSettings, StepReport};
@@ -19,8 +18,7 @@ pub use synthesis::{synthesize, SynthesisReport};
 use crate::{Real, Vec3};
 use ndarray::ArrayViewMut3;
 
-/// A 3 x 3 matrix of [`Real`]; velocity gradients have entry [a][b] = d u_a / d x_b.
-pub type Mat3 = nalgebra::Matrix3<Real>;
+pub use crate::Mat3;
 
 /// Where the layer reads velocity from (advection and stretching, section 4.2).
 pub trait VelocitySource {

@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 use super::{axis, weights, Sums, SynthesisReport};
-use crate::vortex::spatial::PointHash;
+use crate::spatial::PointHash;
 use crate::vortex::{kernel, VortexParticles};
 use crate::{Real, Vec3};
 

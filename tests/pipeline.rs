@@ -1,0 +1,180 @@
+//! The one pipeline: the plan is what runs, a scene with a grid and an SPH fluid steps both on
+//! one clock, and the layering rules of DESIGN.md hold in the source tree.
+
+use eddy::pipeline::{run, Pipeline, RunOptions};
+use eddy::scene;
+use std::path::{Path, PathBuf};
+use tempfile::TempDir;
+
+fn shipped(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(file)
+}
+
+/// Runs `file` for `steps` steps with a stage trace; returns the trace, the plan's trace of one
+/// step, and the output folder.
+fn traced(file: &str, overrides: &[&str], steps: u64) -> (Vec<String>, Vec<String>, TempDir) {
+    let out = tempfile::tempdir().expect("temp dir");
+    let mut overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    overrides.push("output.vtk=false".into());
+    let options = RunOptions {
+        out: Some(out.path().to_owned()),
+        overrides,
+        steps: Some(steps),
+        trace: true,
+        ..RunOptions::default()
+    };
+    let summary = run(&shipped(file), &options).expect("the scene runs");
+    assert_eq!(summary.steps, steps, "{file} stopped early");
+    (summary.trace, summary.plan.step_trace(), out)
+}
+
+/// Every step runs exactly the stages and parts the plan lists, in its order, for a grid
+/// scene, SPH scenes with and without a refinement and with parts switched off, and a scene
+/// with both solvers.
+#[test]
+fn the_plan_is_what_runs() {
+    let cases: [(&str, &[&str]); 7] = [
+        ("lid_driven_cavity.toml", &[]),
+        ("smoke_plume.toml", &["grid.resolution=[16,16,16]"]),
+        ("dam_break.toml", &[]),
+        (
+            "dam_break.toml",
+            &["pressure.divergence_solver=false", "output.metrics=[]"],
+        ),
+        ("refine_dam_break.toml", &["refinement.method=\"vrsph\""]),
+        (
+            "refine_stirring_rod.toml",
+            &["refinement.method=\"mcvsph\""],
+        ),
+        ("coupled_tank_and_plume.toml", &[]),
+    ];
+    for (file, overrides) in cases {
+        let steps = 4;
+        let (trace, step, _) = traced(file, overrides, steps);
+        assert!(!step.is_empty());
+        let expected: Vec<String> = (0..steps).flat_map(|_| step.clone()).collect();
+        assert_eq!(trace, expected, "{file} {overrides:?}");
+    }
+}
+
+/// A stage the plan leaves out does not run: without metrics no metrics file is written, and
+/// without the divergence solve no step runs it.
+#[test]
+fn a_stage_left_out_does_not_run() {
+    let (trace, step, out) = traced(
+        "dam_break.toml",
+        &["pressure.divergence_solver=false", "output.metrics=[]"],
+        3,
+    );
+    assert!(!step.iter().any(|s| s == "metrics" || s == "sph/divergence"));
+    assert!(!trace
+        .iter()
+        .any(|s| s == "metrics" || s == "sph/divergence"));
+    assert!(!out.path().join("metrics.csv").exists());
+    let (trace, step, out) = traced("dam_break.toml", &[], 3);
+    assert!(step.iter().any(|s| s == "sph/divergence") && step.iter().any(|s| s == "metrics"));
+    assert_eq!(trace.iter().filter(|s| *s == "metrics").count(), 3);
+    assert!(out.path().join("metrics.csv").exists());
+}
+
+/// A scene with a grid and an SPH fluid advances both by one dt, the smaller of their stable
+/// steps, and writes both kinds of frames into one folder with one .pvd series per kind.
+#[test]
+fn grid_and_fluid_share_one_clock() {
+    let file = shipped("coupled_tank_and_plume.toml");
+    let s = scene::load(&file, &[]).expect("scene loads");
+    let mut p = Pipeline::build(&s).expect("builds");
+    for _ in 0..60 {
+        let sph_dt = p
+            .sim
+            .sph
+            .as_mut()
+            .expect("sph")
+            .stable_dt()
+            .expect("stable");
+        let grid_dt = p
+            .sim
+            .grid
+            .as_ref()
+            .expect("grid")
+            .stable_dt()
+            .expect("stable");
+        let rec = p.step(s.time.end, None).expect("steps");
+        assert_eq!(rec.dt, sph_dt.min(grid_dt));
+        assert_eq!(rec.sph.expect("sph stepped").dt, rec.dt);
+        assert_eq!(rec.grid.expect("grid stepped").dt, rec.dt);
+        let (sph, grid) = (p.sim.sph.as_ref().unwrap(), p.sim.grid.as_ref().unwrap());
+        assert_eq!(sph.time(), p.sim.time());
+        assert_eq!(grid.time(), p.sim.time());
+    }
+    assert!(p.sim.time() > 0.0);
+
+    let out = tempfile::tempdir().expect("temp dir");
+    let options = RunOptions {
+        out: Some(out.path().to_owned()),
+        until: Some(0.1),
+        ..RunOptions::default()
+    };
+    let summary = run(&file, &options).expect("runs");
+    assert!(summary.fluid_particles > 0 && summary.grid_cells > 0);
+    let names: Vec<String> = std::fs::read_dir(out.path())
+        .expect("output folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    let count = |ext: &str| names.iter().filter(|n| n.ends_with(ext)).count();
+    assert_eq!(count(".pvd"), 2, "{names:?}");
+    assert!(names.contains(&"particles.pvd".into()) && names.contains(&"grid.pvd".into()));
+    assert_eq!(count(".vtp"), summary.frames);
+    assert_eq!(count(".vti"), summary.frames);
+    let dts = |name: &str| -> Vec<String> {
+        let text = std::fs::read_to_string(out.path().join(name)).expect(name);
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).expect("dt").to_owned())
+            .collect()
+    };
+    let (sph, grid) = (dts("particles_metrics.csv"), dts("grid_metrics.csv"));
+    assert_eq!(sph.len() as u64, summary.steps);
+    assert_eq!(sph, grid);
+}
+
+/// The layering rules of DESIGN.md: no part names the scene in its code, and the vortex layer
+/// names neither solver (comments may point to them).
+#[test]
+fn no_import_crosses_the_layers() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let rules: [(&str, &[&str]); 6] = [
+        ("grid", &["crate::scene"]),
+        ("sph", &["crate::scene"]),
+        ("refine", &["crate::scene"]),
+        ("abl", &["crate::scene"]),
+        ("geometry", &["crate::scene"]),
+        ("vortex", &["crate::scene", "crate::sph", "crate::grid"]),
+    ];
+    let mut crossings = Vec::new();
+    for (folder, banned) in rules {
+        let mut stack = vec![src.join(folder)];
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).expect("source folder") {
+                let path = entry.expect("entry").path();
+                if path.is_dir() {
+                    stack.push(path);
+                    continue;
+                }
+                let text = std::fs::read_to_string(&path).expect("source file");
+                let code = text
+                    .lines()
+                    .enumerate()
+                    .filter(|(_, l)| !l.trim_start().starts_with("//"));
+                for (n, line) in code {
+                    if banned.iter().any(|b| line.contains(b)) {
+                        crossings.push(format!("{}:{}: {line}", path.display(), n + 1));
+                    }
+                }
+            }
+        }
+    }
+    assert!(crossings.is_empty(), "{}", crossings.join("\n"));
+}

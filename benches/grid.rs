@@ -2,7 +2,7 @@
 //! 128^3, Taylor–Green error against run time); `eddy bench-grid` takes other sizes.
 
 fn main() -> Result<(), eddy::grid::GridError> {
-    eddy::bench::grid::run(&eddy::bench::grid::GridBenchArgs {
+    eddy::bench::grid::run(&eddy::bench::grid::GridBenchOptions {
         plume: vec![64, 128],
         warmup: 10,
         steps: 10,

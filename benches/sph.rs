@@ -2,7 +2,7 @@
 //! measurement as `eddy bench`, which also takes other sizes and solvers).
 
 fn main() -> Result<(), eddy::pipeline::RunError> {
-    eddy::bench::run(&eddy::bench::BenchArgs {
+    eddy::bench::run(&eddy::bench::BenchOptions {
         sizes: vec![25_000, 100_000],
         solvers: vec!["dfsph".into(), "iisph".into()],
         warmup: 5,

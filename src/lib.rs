@@ -1,9 +1,19 @@
 //! eddy: wall-induced turbulence on MAC grids and SPH particles.
 //!
-//! The crate is laid out as `../shared/DESIGN.md` describes: `scene` reads and validates scene
-//! files and compiles the stage plan, `geometry` holds obstacles and their motion, `sph` the particle
-//! solvers, `metrics` the per-step diagnostics and probes, `io` the writers, and `run` drives a
-//! scene from its first step to its last frame.
+//! The crate is laid out as `../shared/DESIGN.md` describes; every module, by layer:
+//!
+//! - [`pipeline`]: a scene as a [`pipeline::Simulation`] and its stages, the plan printed from
+//!   them, and the one driver loop.
+//! - [`scene`]: scene files (schema, overrides, validation) and the parameters each part is
+//!   built from (`scene::build`).
+//! - [`grid`] (MAC grid) and [`sph`] (particles, with step hooks): the solvers, each from its
+//!   own parameter struct; [`refine`]: the SPH turbulence refinements, attached as step hooks.
+//! - [`vortex`]: the vortex-particle layer, which reads and writes solvers through two traits;
+//!   [`abl`]: the artificial-boundary-layer database and lookup.
+//! - [`geometry`] (bodies and motion), [`spatial`] (the hashed cell grid), [`stepping`] (step
+//!   limits), [`parallel`] (fixed-order sums): shared by the parts above.
+//! - [`metrics`] (diagnostics and probes), [`io`] (VTK, HDF5, CSV, plots), [`bench`] (the
+//!   benchmark tables behind `eddy bench` and `eddy bench-grid`).
 
 pub mod abl;
 pub mod bench;

@@ -6,6 +6,8 @@ use eddy::pipeline::{self as run, Pipeline, Plan, RunOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
+mod cli;
+
 #[derive(Parser)]
 #[command(
     name = "eddy",
@@ -40,9 +42,9 @@ enum Command {
         plan: bool,
     },
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
-    Bench(eddy::bench::BenchArgs),
+    Bench(cli::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
-    BenchGrid(eddy::bench::grid::GridBenchArgs),
+    BenchGrid(cli::bench::GridBenchArgs),
     /// Plot energy and vorticity against time for several runs into one PNG.
     Compare {
         /// Run output folders (each with a metrics.csv).
@@ -53,9 +55,9 @@ enum Command {
         out: PathBuf,
     },
     /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
-    Lookup(eddy::abl::cli::LookupArgs),
+    Lookup(cli::abl::LookupArgs),
     /// Summarise an artificial-boundary-layer database.
-    Info(eddy::abl::cli::InfoArgs),
+    Info(cli::abl::InfoArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -113,8 +115,8 @@ fn main() -> anyhow::Result<()> {
                 s.out.display()
             );
         }
-        Command::Bench(args) => eddy::bench::run(&args)?,
-        Command::BenchGrid(args) => eddy::bench::grid::run(&args)?,
+        Command::Bench(args) => eddy::bench::run(&args.into())?,
+        Command::BenchGrid(args) => eddy::bench::grid::run(&args.into())?,
         Command::Compare { runs, out } => {
             let series = runs
                 .iter()
@@ -123,8 +125,8 @@ fn main() -> anyhow::Result<()> {
             eddy::io::plot::compare(&series, &out)?;
             eprintln!("eddy: wrote {}", out.display());
         }
-        Command::Lookup(args) => eddy::abl::cli::lookup(&args)?,
-        Command::Info(args) => eddy::abl::cli::info(&args)?,
+        Command::Lookup(args) => cli::abl::lookup(&args)?,
+        Command::Info(args) => cli::abl::info(&args)?,
     }
     Ok(())
 }

@@ -6,7 +6,6 @@
 //! The database is written by the `eddy-precompute` binary (the `precompute/` crate); this module
 //! owns the file format so that the library can open, validate and query it without that crate.
 
-pub mod cli;
 mod database;
 mod error;
 mod fingerprint;

@@ -13,20 +13,16 @@ use crate::Real;
 use crate::grid::{GridError, GridSolver};
 use crate::scene::build::grid_params;
 
-/// Options of `eddy bench-grid`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct GridBenchArgs {
+/// What `eddy bench-grid` measures.
+#[derive(Debug, Clone)]
+pub struct GridBenchOptions {
     /// Smoke plume resolutions (cells per side).
-    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "64,128")]
     pub plume: Vec<usize>,
     /// Steps run before timing starts (the plume has to start moving).
-    #[arg(long, default_value_t = 10)]
     pub warmup: u64,
     /// Timed steps.
-    #[arg(long, default_value_t = 10)]
     pub steps: u64,
-    /// Taylor–Green resolutions (cells per side); the flag alone skips the table.
-    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "32,64,128")]
+    /// Taylor–Green resolutions (cells per side); none skips the table.
     pub taylor_green: Vec<usize>,
 }
 
@@ -128,7 +124,7 @@ impl TaylorGreen<'_> {
 }
 
 /// Runs the benchmarks and prints their tables.
-pub fn run(args: &GridBenchArgs) -> Result<(), GridError> {
+pub fn run(args: &GridBenchOptions) -> Result<(), GridError> {
     let threads = rayon::current_num_threads();
     if !args.plume.is_empty() {
         println!(

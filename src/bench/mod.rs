@@ -8,5 +8,5 @@ pub mod sph;
 
 pub use sph::{
     advance, cube_edge, dam_break_scene, dam_break_scene_with, measure, measure_with, run,
-    BenchArgs, BenchResult,
+    BenchOptions, BenchResult,
 };

@@ -10,7 +10,7 @@
 //! gradient, the fields at j) and only adds it up. No arithmetic, however fast, takes a pass
 //! below its floor, so the floors summed over a method's passes bound its overhead from below.
 
-use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchArgs};
+use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchOptions};
 use crate::pipeline::{sph_solver, RunError};
 use crate::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use crate::refine::mcvsph::sample_indices;
@@ -28,7 +28,7 @@ use std::time::Instant;
 const METHODS: [&str; 5] = ["rankine", "vrsph", "mcvsph", "micropolar", "confinement"];
 
 /// Prints the tables `args` asks for (none without `--refinements` or `--mcvsph-error`).
-pub fn run(args: &BenchArgs) -> Result<(), RunError> {
+pub fn run(args: &BenchOptions) -> Result<(), RunError> {
     if let Some(bad) = args
         .refinements
         .iter()

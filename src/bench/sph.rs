@@ -12,32 +12,25 @@ use crate::Real;
 use std::path::Path;
 use std::time::Instant;
 
-/// Options of `eddy bench`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct BenchArgs {
+/// What `eddy bench` measures.
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
     /// Approximate fluid particle counts (each rounded to a cube n^3).
-    #[arg(long, value_delimiter = ',', default_value = "25000,100000,400000")]
     pub sizes: Vec<usize>,
     /// Pressure solvers to time.
-    #[arg(long, value_delimiter = ',', default_value = "dfsph,iisph")]
     pub solvers: Vec<String>,
     /// Steps run before timing starts.
-    #[arg(long, default_value_t = 10)]
     pub warmup: u64,
     /// Timed steps.
-    #[arg(long, default_value_t = 30)]
     pub steps: u64,
     /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
     /// micropolar,confinement), at their paper defaults; see `super::refine`.
-    #[arg(long, value_delimiter = ',')]
     pub refinements: Vec<String>,
     /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
     /// particles at the smallest size.
-    #[arg(long)]
     pub mcvsph_error: bool,
     /// Also time VRSPH's four neighbour passes at each size against the floor of passes that
     /// load the same data and do no arithmetic.
-    #[arg(long)]
     pub passes: bool,
 }
 
@@ -188,7 +181,7 @@ pub fn peak_rss() -> Option<u64> {
 }
 
 /// Runs `eddy bench` and prints a table.
-pub fn run(args: &BenchArgs) -> Result<(), RunError> {
+pub fn run(args: &BenchOptions) -> Result<(), RunError> {
     println!(
         "SPH dam break (SPlisHSPlasH set-up), {} threads, {} warm-up + {} timed steps, dt 1.92 ms",
         rayon::current_num_threads(),

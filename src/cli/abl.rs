@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use super::{AblDatabase, MotionKind};
-use crate::{Real, Vec3};
+use eddy::abl::{AblDatabase, MotionKind};
+use eddy::{Real, Vec3};
 
 /// Options of `eddy lookup`.
 #[derive(Debug, Clone, clap::Args)]
@@ -44,7 +44,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 pub fn lookup(args: &LookupArgs) -> anyhow::Result<()> {
     let db = AblDatabase::open(&args.database, None)?;
     let omega = db.lookup(&args.velocity, &args.angular);
-    crate::io::write_atomic(&args.csv, |out| {
+    eddy::io::write_atomic(&args.csv, |out| {
         writeln!(out, "x,y,z,nx,ny,nz,omega_x,omega_y,omega_z")?;
         for ((p, n), w) in db.points().iter().zip(db.normals()).zip(&omega) {
             writeln!(

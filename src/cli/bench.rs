@@ -1,0 +1,76 @@
+//! The command-line options of `eddy bench` and `eddy bench-grid`, turned into the library's
+//! benchmark options.
+
+use eddy::bench::grid::GridBenchOptions;
+use eddy::bench::BenchOptions;
+
+/// Options of `eddy bench`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchArgs {
+    /// Approximate fluid particle counts (each rounded to a cube n^3).
+    #[arg(long, value_delimiter = ',', default_value = "25000,100000,400000")]
+    pub sizes: Vec<usize>,
+    /// Pressure solvers to time.
+    #[arg(long, value_delimiter = ',', default_value = "dfsph,iisph")]
+    pub solvers: Vec<String>,
+    /// Steps run before timing starts.
+    #[arg(long, default_value_t = 10)]
+    pub warmup: u64,
+    /// Timed steps.
+    #[arg(long, default_value_t = 30)]
+    pub steps: u64,
+    /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
+    /// micropolar,confinement), at their paper defaults.
+    #[arg(long, value_delimiter = ',')]
+    pub refinements: Vec<String>,
+    /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
+    /// particles at the smallest size.
+    #[arg(long)]
+    pub mcvsph_error: bool,
+    /// Also time VRSPH's four neighbour passes at each size against the floor of passes that
+    /// load the same data and do no arithmetic.
+    #[arg(long)]
+    pub passes: bool,
+}
+
+impl From<BenchArgs> for BenchOptions {
+    fn from(a: BenchArgs) -> Self {
+        BenchOptions {
+            sizes: a.sizes,
+            solvers: a.solvers,
+            warmup: a.warmup,
+            steps: a.steps,
+            refinements: a.refinements,
+            mcvsph_error: a.mcvsph_error,
+            passes: a.passes,
+        }
+    }
+}
+
+/// Options of `eddy bench-grid`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct GridBenchArgs {
+    /// Smoke plume resolutions (cells per side).
+    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "64,128")]
+    pub plume: Vec<usize>,
+    /// Steps run before timing starts (the plume has to start moving).
+    #[arg(long, default_value_t = 10)]
+    pub warmup: u64,
+    /// Timed steps.
+    #[arg(long, default_value_t = 10)]
+    pub steps: u64,
+    /// Taylor–Green resolutions (cells per side); the flag alone skips the table.
+    #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "32,64,128")]
+    pub taylor_green: Vec<usize>,
+}
+
+impl From<GridBenchArgs> for GridBenchOptions {
+    fn from(a: GridBenchArgs) -> Self {
+        GridBenchOptions {
+            plume: a.plume,
+            warmup: a.warmup,
+            steps: a.steps,
+            taylor_green: a.taylor_green,
+        }
+    }
+}

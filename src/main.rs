@@ -98,19 +98,29 @@ fn main() -> anyhow::Result<()> {
             );
             let s = run::run_scene(&resolved, &options)
                 .with_context(|| format!("running {}", scene.display()))?;
-            let (count, what) = if s.fluid_particles > 0 {
-                (s.fluid_particles, "fluid particles")
-            } else {
-                (s.grid_cells, "cells")
-            };
+            let rate = |n: usize| s.steps as f64 * n as f64 / s.wall_seconds / 1e6;
+            let mut sizes = Vec::new();
+            if s.fluid_particles > 0 {
+                sizes.push(format!(
+                    "{} fluid particles, {} boundary particles, {:.2} M fluid particle-steps/s",
+                    s.fluid_particles,
+                    s.boundary_particles,
+                    rate(s.fluid_particles)
+                ));
+            }
+            if s.grid_cells > 0 {
+                sizes.push(format!(
+                    "{} cells, {:.2} M cell-steps/s",
+                    s.grid_cells,
+                    rate(s.grid_cells)
+                ));
+            }
             eprintln!(
-                "eddy: {} steps to t = {:.4} s in {:.1} s ({count} {what}, {} boundary particles, \
-                 {:.2} M {what}-steps/s); {} frames in {}",
+                "eddy: {} steps to t = {:.4} s in {:.1} s ({}); {} frames in {}",
                 s.steps,
                 s.time,
                 s.wall_seconds,
-                s.boundary_particles,
-                s.steps as f64 * count as f64 / s.wall_seconds / 1e6,
+                sizes.join("; "),
                 s.frames,
                 s.out.display()
             );

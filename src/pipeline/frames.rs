@@ -9,6 +9,7 @@ use crate::io::{
     Hdf5GridFrames, IoError, ParticleFrame, PvdSeries,
 };
 use crate::sph::SphSolver;
+use crate::Real;
 
 /// Where each kind of output goes: a scene with one solver keeps the plain names
 /// (`metrics.csv`, `frames.h5`); a scene with both prefixes them by kind.
@@ -40,6 +41,28 @@ struct Writers<H> {
 impl<H> Writers<H> {
     fn any(&self) -> bool {
         self.pvd.is_some() || self.hdf5.is_some()
+    }
+
+    /// Writes `frame` of time `time` as the next VTK file `NAME_NNNNNN.EXT` (with `vtk`) into
+    /// the `.pvd` series, and appends it to the HDF5 file (with `append`).
+    fn push<F>(
+        &mut self,
+        frame: &F,
+        time: Real,
+        (name, ext): (&str, &str),
+        vtk: impl FnOnce(&Path, &F) -> Result<(), IoError>,
+        append: impl FnOnce(&mut H, &F) -> Result<(), IoError>,
+    ) -> Result<(), IoError> {
+        if let Some(pvd) = self.pvd.as_mut() {
+            let file = format!("{name}_{:06}.{ext}", self.count);
+            vtk(&self.out.join(&file), frame)?;
+            pvd.push(time, &file)?;
+        }
+        if let Some(h5) = self.hdf5.as_mut() {
+            append(h5, frame)?;
+        }
+        self.count += 1;
+        Ok(())
     }
 }
 
@@ -95,16 +118,13 @@ impl ParticleFrames {
         frame
             .fields
             .extend(extra.iter().map(|(name, data)| Field::vector(name, data)));
-        if let Some(pvd) = w.pvd.as_mut() {
-            let name = format!("particles_{:06}.vtp", w.count);
-            write_particles_vtk(&w.out.join(&name), &frame)?;
-            pvd.push(frame.time, &name)?;
-        }
-        if let Some(h5) = w.hdf5.as_mut() {
-            h5.append(&frame)?;
-        }
-        w.count += 1;
-        Ok(())
+        w.push(
+            &frame,
+            frame.time,
+            ("particles", "vtp"),
+            write_particles_vtk,
+            |h5, f| h5.append(f),
+        )
     }
 
     /// Frames written so far.
@@ -170,16 +190,13 @@ impl GridFrames {
             dims: solver.mac.dims,
             fields,
         };
-        if let Some(pvd) = w.pvd.as_mut() {
-            let name = format!("grid_{:06}.vti", w.count);
-            write_grid_vtk(&w.out.join(&name), &frame)?;
-            pvd.push(frame.time, &name)?;
-        }
-        if let Some(h5) = w.hdf5.as_mut() {
-            h5.append(&frame)?;
-        }
-        w.count += 1;
-        Ok(())
+        w.push(
+            &frame,
+            frame.time,
+            ("grid", "vti"),
+            write_grid_vtk,
+            |h5, f| h5.append(f),
+        )
     }
 
     /// Frames written so far.

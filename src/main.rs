@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use eddy::pipeline::{self as run, Pipeline, Plan, RunOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 mod cli;
 
@@ -60,14 +61,27 @@ enum Command {
     Info(cli::abl::InfoArgs),
 }
 
-fn main() -> anyhow::Result<()> {
+/// Runs the command; an error is printed as its chain of causes, never as a backtrace (an input
+/// error is the user's to fix, not a crash), and the exit status is 1.
+fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
         )
+        .with_ansi(std::io::stderr().is_terminal())
         .with_writer(std::io::stderr)
         .init();
-    match Cli::parse().command {
+    match run(Cli::parse().command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Run {
             scene,
             out,
@@ -132,7 +146,12 @@ fn main() -> anyhow::Result<()> {
                 .iter()
                 .map(|d| eddy::io::plot::RunSeries::read(d))
                 .collect::<Result<Vec<_>, _>>()?;
-            eddy::io::plot::compare(&series, &out)?;
+            let skipped = eddy::io::plot::compare(&series, &out)?;
+            if skipped > 0 {
+                eprintln!(
+                    "eddy: warning: left out {skipped} points whose time or value is not finite"
+                );
+            }
             eprintln!("eddy: wrote {}", out.display());
         }
         Command::Lookup(args) => cli::abl::lookup(&args)?,

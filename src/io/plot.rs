@@ -61,19 +61,26 @@ impl RunSeries {
     }
 
     /// A quantity against time: the sum of the named columns (those present), None when the
-    /// run has no time column or none of them.
-    fn curve(&self, columns: &[&str]) -> Option<Vec<(Real, Real)>> {
+    /// run has no time column or none of them. Points whose time or value is not finite are
+    /// left out; the second value counts them.
+    fn curve(&self, columns: &[&str]) -> Option<(Vec<(Real, Real)>, usize)> {
         let time = self.column("time")?;
         let parts: Vec<Vec<Real>> = columns.iter().filter_map(|c| self.column(c)).collect();
         if parts.is_empty() {
             return None;
         }
-        Some(
-            time.iter()
-                .enumerate()
-                .map(|(i, &t)| (t, parts.iter().map(|p| p[i]).sum()))
-                .collect(),
-        )
+        let all: Vec<(Real, Real)> = time
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, parts.iter().fold(0.0, |s, p| s + p[i])))
+            .collect();
+        let finite: Vec<_> = all
+            .iter()
+            .copied()
+            .filter(|(t, y)| t.is_finite() && y.is_finite())
+            .collect();
+        let skipped = all.len() - finite.len();
+        Some((finite, skipped))
     }
 }
 
@@ -100,8 +107,9 @@ fn register_bundled_font() {
 }
 
 /// Draws energy and vorticity against time for `runs` into the PNG `out` (written under a
-/// temporary name and renamed when complete).
-pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
+/// temporary name and renamed when complete). Returns how many points were left out for a
+/// time or value that is not finite; the axes span the finite ones.
+pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
     if runs.is_empty() {
         return Err(IoError::invalid(out, "no runs to compare"));
     }
@@ -112,15 +120,20 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
         .unwrap_or_else(|| "plot.png".into());
     let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
     let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
-    {
+    let skipped = {
         let root = BitMapBackend::new(&tmp, (1200, 1200)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
         let areas = root.split_evenly((PANELS.len(), 1));
+        let mut skipped = 0;
         for (area, (title, columns)) in areas.iter().zip(PANELS) {
             let curves: Vec<(usize, Vec<(Real, Real)>)> = runs
                 .iter()
                 .enumerate()
                 .filter_map(|(k, r)| r.curve(columns).map(|c| (k, c)))
+                .map(|(k, (c, left_out))| {
+                    skipped += left_out;
+                    (k, c)
+                })
                 .collect();
             let points = || curves.iter().flat_map(|(_, c)| c.iter());
             let (t0, t1) =
@@ -133,6 +146,15 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
                 continue;
             }
             let pad = 0.05 * (y1 - y0).max(1e-12 * y1.abs().max(1.0));
+            // A range wider than f64 holds (values near +-1e308) has no axis to draw on.
+            if !((y1 + pad) - (y0 - pad)).is_finite() || !(t1 - t0).is_finite() {
+                area.titled(
+                    &format!("{title}: values span more than a float can hold"),
+                    ("sans-serif", 20),
+                )
+                .map_err(|e| fail(&e))?;
+                continue;
+            }
             let mut chart = ChartBuilder::on(area)
                 .caption(title, ("sans-serif", 20))
                 .margin(12)
@@ -165,6 +187,8 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<(), IoError> {
                 .map_err(|e| fail(&e))?;
         }
         root.present().map_err(|e| fail(&e))?;
-    }
-    std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))
+        skipped
+    };
+    std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))?;
+    Ok(skipped)
 }

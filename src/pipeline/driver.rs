@@ -8,6 +8,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::build::Pipeline;
+use super::frames::remove_earlier_outputs;
 use super::plan::Plan;
 use super::simulation::StepError;
 use super::stages::StepRecord;
@@ -31,12 +32,20 @@ struct End {
 /// Runs an already resolved scene into its output folder.
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
     let started = Instant::now();
+    options.check()?;
     let out = output_dir(scene, options);
     std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
         path: out.clone(),
         action: "creating the output folder",
         source: e,
     })?;
+    let removed = remove_earlier_outputs(&out)?;
+    if removed > 0 {
+        tracing::warn!(
+            "removed {removed} output files of an earlier run from {}",
+            out.display()
+        );
+    }
     let resolved = scene.to_toml();
     write_atomic(&out.join("scene.toml"), |w| {
         w.write_all(resolved.as_bytes())

@@ -227,3 +227,44 @@ impl GridFrames {
         write_grid_vtk(&self.0.out.join("average.vti"), &frame)
     }
 }
+
+/// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
+/// a folder can clear an earlier run's files and ParaView never mixes two runs.
+pub fn is_run_output(name: &str) -> bool {
+    const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
+    let numbered = |prefix: &str, ext: &str| {
+        name.strip_prefix(prefix)
+            .and_then(|rest| rest.strip_suffix(ext))
+            .is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let unprefixed = name
+        .strip_prefix("particles_")
+        .or_else(|| name.strip_prefix("grid_"))
+        .unwrap_or(name);
+    FIXED.contains(&name)
+        || ["metrics.csv", "probes.csv", "frames.h5"].contains(&unprefixed)
+        || numbered("particles_", ".vtp")
+        || numbered("grid_", ".vti")
+        || (name.starts_with("profile_") && name.ends_with(".csv"))
+}
+
+/// Removes the files of an earlier run from `out` (only names [`is_run_output`] accepts);
+/// returns how many.
+pub fn remove_earlier_outputs(out: &Path) -> Result<usize, IoError> {
+    let io = |action, source| IoError::Io {
+        path: out.to_path_buf(),
+        action,
+        source,
+    };
+    let mut removed = 0;
+    for entry in std::fs::read_dir(out).map_err(|e| io("listing the output folder", e))? {
+        let entry = entry.map_err(|e| io("listing the output folder", e))?;
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file && entry.file_name().to_str().is_some_and(is_run_output) {
+            std::fs::remove_file(entry.path())
+                .map_err(|e| io("removing an earlier run's output", e))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}

@@ -55,6 +55,12 @@ pub enum RunError {
     },
     #[error("{0}")]
     Unsupported(String),
+    #[error("{option} = {value}: {allowed}")]
+    InvalidOption {
+        option: &'static str,
+        value: String,
+        allowed: &'static str,
+    },
 }
 
 /// Command-line choices that are not part of the scene.
@@ -92,8 +98,31 @@ pub struct RunSummary {
     pub trace: Vec<String>,
 }
 
-/// Loads `path` with the options' overrides, ready to run.
+impl RunOptions {
+    /// Checks the options that are not part of the scene: `until` a finite time > 0, `steps`
+    /// at least 1.
+    pub fn check(&self) -> Result<(), RunError> {
+        if let Some(t) = self.until.filter(|t| !(t.is_finite() && *t > 0.0)) {
+            return Err(RunError::InvalidOption {
+                option: "--until",
+                value: t.to_string(),
+                allowed: "a finite time > 0 s",
+            });
+        }
+        if self.steps == Some(0) {
+            return Err(RunError::InvalidOption {
+                option: "--steps",
+                value: "0".into(),
+                allowed: "at least 1 step",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Loads `path` with the options' overrides, ready to run; checks the options too.
 pub fn resolve(path: &Path, options: &RunOptions) -> Result<Scene, RunError> {
+    options.check()?;
     Ok(scene::load(path, &options.overrides)?)
 }
 

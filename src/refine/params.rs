@@ -29,7 +29,7 @@ use crate::Real;
 #[error("{key} = {value}: allowed is {allowed}")]
 pub struct InvalidParam {
     pub key: String,
-    pub value: String,
+    pub value: Real,
     pub allowed: String,
 }
 
@@ -166,7 +166,7 @@ impl Refinement {
             };
             Err(InvalidParam {
                 key: format!("refinement.{key}"),
-                value: value.to_string(),
+                value,
                 allowed: format!("{allowed} for method \"{}\"", self.method()),
             })
         };

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use toml::de::DeValue;
-use toml::{Spanned, Table};
+use toml::{Spanned, Table, Value};
 
 use super::overrides::apply_override;
 use super::{Body, Scene, SceneError, Shape};
@@ -40,9 +40,62 @@ pub fn parse_str(text: &str, origin: &Path, overrides: &[String]) -> Result<Scen
         // Line numbers in the rendered text would mean nothing to the user: keep only the key.
         deserialize(&rendered, origin, false)?
     };
+    check_array_lengths(&table, &scene, origin)?;
     resolve_mesh_paths(&mut scene, origin);
     scene.validate(origin)?;
     Ok(scene)
+}
+
+/// Fixed-length arrays (a position, a velocity, a resolution) take exactly their length: serde
+/// reads the first three values of a longer array and drops the rest, so every array of the
+/// document is compared with the same array of the scene written back.
+fn check_array_lengths(document: &Table, scene: &Scene, file: &Path) -> Result<(), SceneError> {
+    let Ok(toml::Value::Table(written)) = toml::Value::try_from(scene) else {
+        // A scene TOML cannot hold (a seed above i64::MAX) has no written form to compare.
+        return Ok(());
+    };
+    let mut found = None;
+    compare_arrays(document, &written, "", &mut found);
+    match found {
+        None => Ok(()),
+        Some((key, given, kept)) => Err(SceneError::Invalid {
+            file: file.to_owned(),
+            key,
+            value: format!("{given} values"),
+            allowed: format!("exactly {kept}"),
+        }),
+    }
+}
+
+/// Records in `found` the first array of `given` that `kept` holds fewer values of:
+/// (dotted key, values given, values kept).
+fn compare_arrays(
+    given: &Table,
+    kept: &Table,
+    prefix: &str,
+    found: &mut Option<(String, usize, usize)>,
+) {
+    for (key, value) in given {
+        let path = if prefix.is_empty() {
+            key.clone()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        match (value, kept.get(key)) {
+            (Value::Table(g), Some(Value::Table(k))) => compare_arrays(g, k, &path, found),
+            (Value::Array(g), Some(Value::Array(k))) => {
+                if g.len() > k.len() && found.is_none() {
+                    *found = Some((path.clone(), g.len(), k.len()));
+                }
+                for (i, (g, k)) in g.iter().zip(k).enumerate() {
+                    if let (Value::Table(g), Value::Table(k)) = (g, k) {
+                        compare_arrays(g, k, &format!("{path}[{i}]"), found);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
 }
 
 impl Scene {

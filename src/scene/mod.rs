@@ -10,7 +10,7 @@ pub mod schema;
 pub mod validate;
 
 pub use crate::refine::Refinement;
-pub use error::SceneError;
+pub use error::{Number, SceneError};
 pub use grid::{Advection, Grid, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 pub use load::{load, parse_str};
 pub use overrides::apply_override;

@@ -6,7 +6,7 @@ use std::fmt;
 use std::path::Path;
 
 use super::load::base_dir;
-use super::{Body, Domain, Motion, Probe, Scene, SceneError, Shape};
+use super::{Body, Domain, Motion, Number, Probe, Scene, SceneError, Shape};
 use crate::Real;
 
 /// Largest `pressure.max_iterations`: beyond it a solve that does not converge never ends in
@@ -69,7 +69,7 @@ impl Scene {
         self.validate_grid(&c)?;
         self.refinement
             .validate()
-            .map_err(|e| c.invalid(e.key, e.value, e.allowed))?;
+            .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;
         self.validate_probes(&c)?;
         c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
         let mut metrics = HashSet::new();
@@ -272,7 +272,7 @@ impl Checker<'_> {
         if value.is_finite() && allowed.contains(value) {
             Ok(())
         } else {
-            Err(self.invalid(key, value, allowed.describe(!value.is_finite())))
+            Err(self.invalid(key, Number(value), allowed.describe(!value.is_finite())))
         }
     }
 
@@ -455,10 +455,10 @@ impl Interval {
     fn describe(&self, say_finite: bool) -> String {
         let range = match (self.lo, self.hi) {
             (Bound::Unbounded, Bound::Unbounded) => String::new(),
-            (Bound::Open(lo), Bound::Unbounded) => format!("> {lo}"),
-            (Bound::Closed(lo), Bound::Unbounded) => format!(">= {lo}"),
-            (Bound::Unbounded, Bound::Open(hi)) => format!("< {hi}"),
-            (Bound::Unbounded, Bound::Closed(hi)) => format!("<= {hi}"),
+            (Bound::Open(lo), Bound::Unbounded) => format!("> {}", Number(lo)),
+            (Bound::Closed(lo), Bound::Unbounded) => format!(">= {}", Number(lo)),
+            (Bound::Unbounded, Bound::Open(hi)) => format!("< {}", Number(hi)),
+            (Bound::Unbounded, Bound::Closed(hi)) => format!("<= {}", Number(hi)),
             (lo, hi) => {
                 let (open, a) = match lo {
                     Bound::Open(a) => ('(', a),
@@ -470,7 +470,7 @@ impl Interval {
                     Bound::Closed(b) => (']', b),
                     Bound::Unbounded => (')', Real::INFINITY),
                 };
-                format!("{open}{a}, {b}{close}")
+                format!("{open}{}, {}{close}", Number(a), Number(b))
             }
         };
         let mut out = match (say_finite || range.is_empty(), range.is_empty()) {

@@ -1,0 +1,197 @@
+//! Paper cuts a new user found (issue 19): each test failed before its fix.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::mpsc;
+use std::time::Duration;
+
+use eddy::io::plot::{compare, RunSeries};
+use eddy::pipeline::{run, RunError, RunOptions};
+use eddy::scene::parse_str;
+
+const TINY: &str = r#"name = "tiny"
+gravity = [0.0, -9.81, 0.0]
+
+[domain]
+min = [0, 0, 0]
+max = [1, 1, 1]
+
+[time]
+end = 1.0
+
+[fluid]
+spacing = 0.05
+
+[[fluid.blocks]]
+min = [0, 0, 0]
+max = [0.5, 0.5, 0.5]
+velocity = [0.0, 0.0, 0.0]
+
+[[obstacles]]
+shape = { type = "box", half_extents = [0.1, 0.1, 0.1] }
+position = [0.8, 0.8, 0.8]
+"#;
+
+fn shipped(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(file)
+}
+
+/// A fixed-length array with more values than it holds is an error naming the key and the
+/// length given, wherever it sits (top level, a block, an obstacle's shape, an override); none
+/// is cut to three silently.
+#[test]
+fn arrays_take_exactly_their_length() {
+    let cases = [
+        (
+            "gravity = [0.0, -9.81, 0.0]",
+            "gravity = [0.0, -9.81, 0.0, 1.0]",
+            "gravity",
+        ),
+        (
+            "velocity = [0.0, 0.0, 0.0]",
+            "velocity = [0.0, 0.0, 0.0, 2.0]",
+            "fluid.blocks[0].velocity",
+        ),
+        (
+            "half_extents = [0.1, 0.1, 0.1]",
+            "half_extents = [0.1, 0.1, 0.1, 0.1]",
+            // serde checks lengths inside a tagged shape itself, naming the shape.
+            "obstacles[0].shape",
+        ),
+    ];
+    for (good, bad, key) in cases {
+        let text = TINY.replace(good, bad);
+        let e = parse_str(&text, Path::new("tiny.toml"), &[]).expect_err(bad);
+        let m = e.to_string();
+        assert!(m.contains(key) && m.contains('4') && m.contains('3'), "{m}");
+    }
+    let e = parse_str(
+        TINY,
+        Path::new("tiny.toml"),
+        &["domain.max=[1,1,1,1]".into()],
+    )
+    .expect_err("override with four values");
+    assert!(e.to_string().contains("domain.max"), "{e}");
+    parse_str(TINY, Path::new("tiny.toml"), &[]).expect("three values are fine");
+}
+
+/// Numbers in messages are short: a bound of 1e-308 is written so, not as 308 digits.
+#[test]
+fn numbers_in_messages_are_short() {
+    let text = TINY.replace("end = 1.0", "end = 1.0\ndt_min = 1e-308\ndt_max = 1e-310");
+    let m = parse_str(&text, Path::new("tiny.toml"), &[])
+        .expect_err("dt_max below dt_min")
+        .to_string();
+    assert!(m.contains("1e-310") && m.contains("1e-308"), "{m}");
+    assert!(m.len() < 200, "{m}");
+}
+
+/// `--until` must be a finite time > 0 and `--steps` at least 1.
+#[test]
+fn run_options_are_checked() {
+    for (until, steps) in [
+        (Some(f64::NAN), None),
+        (Some(-1.0), None),
+        (Some(f64::INFINITY), None),
+        (None, Some(0)),
+    ] {
+        let options = RunOptions {
+            out: Some(std::env::temp_dir().join("eddy_bad_option")),
+            until,
+            steps,
+            ..RunOptions::default()
+        };
+        let e = run(&shipped("dam_break.toml"), &options).expect_err("refused");
+        assert!(matches!(e, RunError::InvalidOption { .. }), "{e}");
+    }
+}
+
+/// The command line prints an input error as one message, never a backtrace (even with
+/// RUST_BACKTRACE=1), exits 1, and writes no colour codes when stderr is not a terminal.
+#[test]
+fn cli_errors_have_no_backtrace() {
+    let out = Command::new(env!("CARGO_BIN_EXE_eddy"))
+        .args(["run", "--plan", "--set", "time.cfl=7"])
+        .arg(shipped("dam_break.toml"))
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("eddy runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("time.cfl") && stderr.contains("(0, 1]"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("backtrace") && !stderr.contains("main.rs"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains('\u{1b}'), "{stderr}");
+}
+
+/// A run into a folder that holds an earlier run's files removes those (and only eddy's own
+/// outputs) first, so ParaView never mixes two runs; the warning carries no colour codes.
+#[test]
+fn a_rerun_clears_the_earlier_outputs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let eddy = |until: &str| {
+        Command::new(env!("CARGO_BIN_EXE_eddy"))
+            .args(["run", "--until", until, "--out"])
+            .arg(dir.path())
+            .arg(shipped("dam_break.toml"))
+            .output()
+            .expect("eddy runs")
+    };
+    assert!(eddy("0.1").status.success());
+    std::fs::write(dir.path().join("notes.txt"), "mine").expect("user file");
+    let second = eddy("0.04");
+    assert!(second.status.success());
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(
+        stderr.contains("earlier run") && !stderr.contains('\u{1b}'),
+        "{stderr}"
+    );
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    let frames = names.iter().filter(|n| n.ends_with(".vtp")).count();
+    let pvd = std::fs::read_to_string(dir.path().join("particles.pvd")).expect("series");
+    assert_eq!(frames, pvd.matches("<DataSet").count(), "{names:?}");
+    assert_eq!(frames, 3, "frames at 0, 0.02, 0.04 s: {names:?}");
+    assert!(names.contains(&"notes.txt".into()));
+}
+
+/// `eddy compare` finishes on metrics with infinite, NaN and +-1e308 values: non-finite points
+/// are left out and counted, and the axes come from the finite ones.
+#[test]
+fn compare_survives_non_finite_and_huge_values() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let run_dir = dir.path().join("bad");
+    std::fs::create_dir(&run_dir).expect("run folder");
+    let mut csv = String::from("step,time,dt,kinetic_energy,total_energy,vorticity_mean\n");
+    for i in 0..20 {
+        let t = 0.01 * i as f64;
+        let ke = match i {
+            5 => "inf".to_owned(),
+            6 => "NaN".to_owned(),
+            _ => format!("{}", 0.5 * t),
+        };
+        let total = if i % 2 == 0 { "1e308" } else { "-1e308" };
+        csv += &format!("{i},{t},0.01,{ke},{total},{t}\n");
+    }
+    std::fs::write(run_dir.join("metrics.csv"), csv).expect("metrics");
+    let series = RunSeries::read(&run_dir).expect("reads");
+    let png = dir.path().join("cmp.png");
+    let (tx, rx) = mpsc::channel();
+    let target = png.clone();
+    std::thread::spawn(move || tx.send(compare(&[series], &target).map_err(|e| e.to_string())));
+    let skipped = rx
+        .recv_timeout(Duration::from_secs(60))
+        .expect("compare finishes within a minute")
+        .expect("compare succeeds");
+    assert_eq!(skipped, 2);
+    assert!(png.exists());
+}

@@ -424,8 +424,11 @@ fn hdf5_frames_roundtrip() {
     }
 }
 
+/// The index is rewritten whole for every frame and no frame file is touched once written: an
+/// index cut in half, emptied or deleted is replaced at the next append by a complete one that
+/// lists every frame; an append whose folder is gone fails without advancing.
 #[test]
-fn hdf5_append_to_truncated_file_is_an_error() {
+fn hdf5_index_is_rewritten_whole() {
     let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cut.h5");
@@ -439,24 +442,39 @@ fn hdf5_append_to_truncated_file_is_an_error() {
     };
     out.append(&frame).unwrap();
     out.append(&frame).unwrap();
-
     let len = fs::metadata(&path).unwrap().len();
-    fs::OpenOptions::new()
-        .write(true)
-        .open(&path)
-        .unwrap()
-        .set_len(len / 2)
-        .unwrap();
-    let err = out.append(&frame).unwrap_err();
-    assert!(matches!(err, IoError::Hdf5 { .. }), "{err:?}");
-    assert!(err.to_string().contains("cut.h5"), "{err}");
-    assert_eq!(out.len(), 2, "a failed append must not advance the index");
+    let damage: [&dyn Fn(); 3] = [
+        &|| {
+            fs::OpenOptions::new()
+                .write(true)
+                .open(&path)
+                .unwrap()
+                .set_len(len / 2)
+                .unwrap()
+        },
+        &|| fs::write(&path, b"").unwrap(),
+        &|| fs::remove_file(&path).unwrap(),
+    ];
+    for damage in damage {
+        damage();
+        out.append(&frame).unwrap();
+        let file = hdf5::File::open(&path).unwrap();
+        let scene: hdf5::types::VarLenUnicode = read_attr(&file, "scene");
+        assert_eq!(scene.as_str(), "cut");
+        let frames = file.group("frames").unwrap();
+        assert_eq!(frames.len() as u64, out.len());
+        for name in frames.member_names().unwrap() {
+            let p = frames.group(&name).unwrap().dataset("position").unwrap();
+            assert_eq!(p.read_raw::<f64>().unwrap(), flat(&pos), "frame {name}");
+        }
+    }
+    assert_eq!(out.len(), 5);
+    no_temp_files(dir.path());
 
-    // A file cut to nothing, and one that is gone, fail the same way.
-    fs::write(&path, b"").unwrap();
-    assert!(out.append(&frame).is_err());
-    fs::remove_file(&path).unwrap();
-    assert!(out.append(&frame).is_err());
+    drop(dir);
+    let err = out.append(&frame).unwrap_err();
+    assert!(err.to_string().contains("cut"), "{err}");
+    assert_eq!(out.len(), 5, "a failed append must not advance the index");
 }
 
 #[test]

@@ -1,5 +1,7 @@
 //! Paper cuts a new user found (issue 19): each test failed before its fix.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::mpsc;
@@ -112,6 +114,7 @@ fn run_options_are_checked() {
 /// RUST_BACKTRACE=1), exits 1, and writes no colour codes when stderr is not a terminal.
 #[test]
 fn cli_errors_have_no_backtrace() {
+    let _serial = common::hdf5_or_child();
     let out = Command::new(env!("CARGO_BIN_EXE_eddy"))
         .args(["run", "--plan", "--set", "time.cfl=7"])
         .arg(shipped("dam_break.toml"))
@@ -135,6 +138,7 @@ fn cli_errors_have_no_backtrace() {
 /// outputs) first, so ParaView never mixes two runs; the warning carries no colour codes.
 #[test]
 fn a_rerun_clears_the_earlier_outputs() {
+    let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().expect("temp dir");
     let eddy = |until: &str| {
         Command::new(env!("CARGO_BIN_EXE_eddy"))
@@ -194,4 +198,50 @@ fn compare_survives_non_finite_and_huge_values() {
         .expect("compare succeeds");
     assert_eq!(skipped, 2);
     assert!(png.exists());
+}
+
+/// A run's `frames.h5` survives `kill -9` at any point: whenever the index exists it opens,
+/// and every frame it lists reads back whole (each frame is its own file, renamed when
+/// complete, and the index is rewritten whole and renamed).
+#[test]
+fn hdf5_frames_survive_a_kill_at_any_point() {
+    let _serial = common::hdf5_or_child();
+    let mut listed = Vec::new();
+    for k in 0..16u64 {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_eddy"))
+            .args(["run", "--until", "0.6", "--out"])
+            .arg(dir.path())
+            .args(["--set", "output.vtk=false", "--set", "output.hdf5=true"])
+            .args(["--set", "output.interval=0.005"])
+            .arg(shipped("dam_break.toml"))
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("eddy starts");
+        std::thread::sleep(Duration::from_millis(60 + 97 * k));
+        let _ = child.kill();
+        child.wait().expect("eddy ends");
+        let index = dir.path().join("frames.h5");
+        if !index.exists() {
+            listed.push(0);
+            continue;
+        }
+        let file = hdf5::File::open(&index).expect("the index opens after a kill");
+        let frames = file.group("frames").expect("/frames");
+        let names = frames.member_names().expect("frame list");
+        for name in &names {
+            let g = frames.group(name).expect("a listed frame opens");
+            let x = g.dataset("position").expect("position");
+            let n = x.shape()[0];
+            assert_eq!(x.read_raw::<f64>().expect("positions read").len(), 3 * n);
+            let v = g.dataset("velocity").expect("velocity");
+            assert_eq!(v.read_raw::<f64>().expect("velocities read").len(), 3 * n);
+            assert!(g.attr("time").is_ok() && g.attr("step").is_ok());
+        }
+        listed.push(names.len());
+    }
+    // The kill points span the run: some before the first frame, most in between frames.
+    let with_frames = listed.iter().filter(|&&n| n > 0).count();
+    assert!(with_frames >= 8, "{listed:?}");
+    assert!(listed.windows(2).any(|w| w[1] > w[0]), "{listed:?}");
 }

@@ -1,4 +1,4 @@
-//! All particle frames of a run in one HDF5 file, laid out for h5py.
+//! All particle frames of a run behind one HDF5 file, laid out for h5py.
 //!
 //! ```text
 //! /                      root attributes given at creation (scene name, spacing, ...)
@@ -6,6 +6,13 @@
 //! /frames/000000/position  N x 3 f64
 //! /frames/000000/<field>   N f64 (scalar) or N x 3 f64 (vector)
 //! ```
+//!
+//! **Crash safety.** Each frame is its own file `STEM_NNNNNN.h5` beside the index `STEM.h5`,
+//! written under a temporary name and renamed when complete; `/frames/NNNNNN` in the index is
+//! an HDF5 external link to that file's root, which h5py and the HDF5 library follow (relative
+//! to the index's folder). The index is rewritten whole for every frame, under a temporary name
+//! and renamed, so a kill at any point leaves an index that opens and lists only complete
+//! frames. No HDF5 file is ever modified in place.
 
 use std::path::{Path, PathBuf};
 
@@ -19,9 +26,6 @@ use crate::Real;
 
 /// Group under which frames are listed; every member is a complete frame.
 const FRAMES: &str = "frames";
-/// Where a frame is built before it is moved under [`FRAMES`]; a crash mid-frame leaves it here,
-/// outside the frame list, and the next append discards it.
-const PARTIAL: &str = "partial_frame";
 
 /// A root attribute value.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,28 +60,78 @@ impl From<i64> for AttrValue {
     }
 }
 
-/// All frames in one HDF5 file readable by h5py, one group `/frames/NNNNNN` (6-digit
-/// zero-padded frame index, counting from 0) per frame.
-///
-/// The file is opened, appended and closed for each frame so a crash between frames keeps every
-/// finished frame readable. A frame is built under a temporary group and moved (HDF5 link move)
-/// to its final name only when complete, so a half-written frame never appears under
-/// `/frames`. A crash *during* an append can still damage HDF5 metadata of the whole file;
-/// HDF5 without SWMR offers no stronger guarantee.
+/// All frames behind one HDF5 index readable by h5py, one group `/frames/NNNNNN` (6-digit
+/// zero-padded frame index, counting from 0) per frame, each frame in its own file (see the
+/// module documentation for why a crash cannot damage a listed frame).
 ///
 /// HDF5 serializes all calls behind one global lock: append from one thread.
 #[derive(Debug)]
 pub struct Hdf5Frames {
-    path: PathBuf,
-    next_index: u64,
+    index: FrameIndex,
 }
 
 impl Hdf5Frames {
-    /// Creates (or replaces) the file with the given root attributes and an empty `/frames`.
-    ///
-    /// The file is built under a temporary sibling name and renamed, so a crash here never
-    /// leaves a file without its attributes.
+    /// Creates (or replaces) the index with the given root attributes and an empty `/frames`,
+    /// under a temporary name and renamed, so a crash here never leaves a file without its
+    /// attributes.
     pub fn create(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<Self, IoError> {
+        Ok(Self {
+            index: FrameIndex::create(path, attributes)?,
+        })
+    }
+
+    /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
+    /// complete, so a failed append can be retried.
+    pub fn append(&mut self, frame: &ParticleFrame) -> Result<(), IoError> {
+        frame.validate(&self.index.path, "position")?;
+        self.index.append(
+            frame.step,
+            frame.time,
+            |_| Ok(()),
+            |group| {
+                let n = frame.positions.len();
+                write_dataset(group, "position", &flatten(frame.positions), n, 3)?;
+                for field in &frame.fields {
+                    match field.data {
+                        FieldData::Scalar(v) => write_dataset(group, field.name, v, n, 1)?,
+                        FieldData::Vector(v) => {
+                            write_dataset(group, field.name, &flatten(v), n, 3)?
+                        }
+                    }
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// Number of frames appended so far.
+    pub fn len(&self) -> u64 {
+        self.index.len()
+    }
+
+    /// True before the first frame.
+    pub fn is_empty(&self) -> bool {
+        self.index.len() == 0
+    }
+
+    /// The index file's path.
+    pub fn path(&self) -> &Path {
+        &self.index.path
+    }
+}
+
+/// The index file of a frame series and the frame files it links.
+#[derive(Debug)]
+pub(super) struct FrameIndex {
+    pub(super) path: PathBuf,
+    attributes: Vec<(String, AttrValue)>,
+    /// File names of the complete frames, in order.
+    frames: Vec<String>,
+}
+
+impl FrameIndex {
+    /// Checks the attribute names and writes the index with no frames.
+    pub(super) fn create(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<Self, IoError> {
         for (i, (name, _)) in attributes.iter().enumerate() {
             if name.is_empty() || attributes[..i].iter().any(|(other, _)| other == name) {
                 return Err(IoError::invalid(
@@ -86,54 +140,98 @@ impl Hdf5Frames {
                 ));
             }
         }
-        let tmp = temp_sibling(path)?;
-        let result = create_file(&tmp, attributes)
-            .map_err(|(action, message)| IoError::Hdf5 {
-                path: path.to_path_buf(),
-                action,
-                message,
-            })
-            .and_then(|()| {
-                std::fs::rename(&tmp, path)
-                    .map_err(|e| IoError::io(path, "renaming temporary file onto", e))
-            });
-        if result.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        result.map(|()| Hdf5Frames {
+        let index = Self {
             path: path.to_path_buf(),
-            next_index: 0,
-        })
+            attributes: attributes
+                .iter()
+                .map(|(n, v)| (n.to_string(), v.clone()))
+                .collect(),
+            frames: Vec::new(),
+        };
+        index.write(&index.frames, |_| Ok(()))?;
+        Ok(index)
     }
 
-    /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
-    /// complete, so a failed append can be retried.
-    pub fn append(&mut self, frame: &ParticleFrame) -> Result<(), IoError> {
-        frame.validate(&self.path, "position")?;
-        let name = format!("{:06}", self.next_index);
-        append_frame(&self.path, &name, frame).map_err(|(action, message)| IoError::Hdf5 {
-            path: self.path.clone(),
-            action,
-            message,
+    /// Frames listed so far.
+    pub(super) fn len(&self) -> u64 {
+        self.frames.len() as u64
+    }
+
+    /// Writes the next frame's file (attributes `time`, `step`, content by `content`), then the
+    /// index listing it, with root attributes beyond the creation ones from `root`.
+    pub(super) fn append(
+        &mut self,
+        step: u64,
+        time: Real,
+        root: impl Fn(&Group) -> Result<(), Failure>,
+        content: impl FnOnce(&Group) -> Result<(), Failure>,
+    ) -> Result<(), IoError> {
+        let stem = self
+            .path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or_else(|| IoError::invalid(&self.path, "the file name is not UTF-8"))?;
+        let name = format!("{stem}_{:06}.h5", self.frames.len());
+        let frame_path = self.path.with_file_name(&name);
+        replace_file(&frame_path, |file| {
+            write_scalar_attr(file, "time", &time)?;
+            write_scalar_attr(file, "step", &step)?;
+            content(file)
         })?;
-        self.next_index += 1;
+        let mut frames = self.frames.clone();
+        frames.push(name);
+        self.write(&frames, root)?;
+        self.frames = frames;
         Ok(())
     }
 
-    /// Number of frames appended so far.
-    pub fn len(&self) -> u64 {
-        self.next_index
+    /// Replaces the index by one listing `frames`.
+    fn write(
+        &self,
+        frames: &[String],
+        root: impl Fn(&Group) -> Result<(), Failure>,
+    ) -> Result<(), IoError> {
+        replace_file(&self.path, |file| {
+            write_root_attributes(file, &self.attributes)?;
+            root(file)?;
+            let list = ctx(file.create_group(FRAMES), || "creating /frames".into())?;
+            for (k, target) in frames.iter().enumerate() {
+                let link = format!("{k:06}");
+                ctx(list.link_external(target, "/", &link), || {
+                    format!("linking frame {link} to {target}")
+                })?;
+            }
+            Ok(())
+        })
     }
+}
 
-    /// True before the first frame.
-    pub fn is_empty(&self) -> bool {
-        self.next_index == 0
+/// Builds an HDF5 file with `write` under a temporary sibling name and renames it onto `path`;
+/// on failure the temporary file is removed and `path` is left as it was.
+fn replace_file(
+    path: &Path,
+    write: impl FnOnce(&File) -> Result<(), Failure>,
+) -> Result<(), IoError> {
+    let tmp = temp_sibling(path)?;
+    let built = (|| {
+        let file = ctx(File::create(&tmp), || "creating file".into())?;
+        write(&file)?;
+        ctx(file.close(), || "closing file".into())
+    })();
+    let result = built
+        .map_err(|(action, message)| IoError::Hdf5 {
+            path: path.to_path_buf(),
+            action,
+            message,
+        })
+        .and_then(|()| {
+            std::fs::rename(&tmp, path)
+                .map_err(|e| IoError::io(path, "renaming temporary file onto", e))
+        });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
-
-    /// The file's path.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
+    result
 }
 
 /// An HDF5 failure as (what was being done, the library's message).
@@ -144,28 +242,25 @@ pub(super) fn ctx<T>(r: hdf5::Result<T>, action: impl FnOnce() -> String) -> Res
     r.map_err(|e| (action(), e.to_string()))
 }
 
-fn create_file(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<(), Failure> {
-    let file = ctx(File::create(path), || "creating file".into())?;
-    {
-        let root: &Group = &file;
-        for (name, value) in attributes {
-            let what = || format!("writing root attribute {name:?}");
-            match value {
-                AttrValue::Str(s) => {
-                    let v: VarLenUnicode = s.parse().map_err(|e| (what(), format!("{e}")))?;
-                    let attr = ctx(
-                        root.new_attr::<VarLenUnicode>().shape(()).create(*name),
-                        what,
-                    )?;
-                    ctx(attr.as_writer().write_scalar(&v), what)?;
-                }
-                AttrValue::Real(v) => write_scalar_attr(root, name, v)?,
-                AttrValue::Int(v) => write_scalar_attr(root, name, v)?,
+fn write_root_attributes(root: &Group, attributes: &[(String, AttrValue)]) -> Result<(), Failure> {
+    for (name, value) in attributes {
+        let what = || format!("writing root attribute {name:?}");
+        match value {
+            AttrValue::Str(s) => {
+                let v: VarLenUnicode = s.parse().map_err(|e| (what(), format!("{e}")))?;
+                let attr = ctx(
+                    root.new_attr::<VarLenUnicode>()
+                        .shape(())
+                        .create(name.as_str()),
+                    what,
+                )?;
+                ctx(attr.as_writer().write_scalar(&v), what)?;
             }
+            AttrValue::Real(v) => write_scalar_attr(root, name, v)?,
+            AttrValue::Int(v) => write_scalar_attr(root, name, v)?,
         }
-        ctx(root.create_group(FRAMES), || "creating /frames".into())?;
     }
-    ctx(file.close(), || "closing file".into())
+    Ok(())
 }
 
 pub(super) fn write_scalar_attr<T: hdf5::H5Type>(
@@ -196,57 +291,4 @@ fn write_dataset(
         ctx(ds.as_writer().write_raw(data), what)?;
     }
     Ok(())
-}
-
-fn append_frame(path: &Path, name: &str, frame: &ParticleFrame) -> Result<(), Failure> {
-    append_group(path, name, frame.step, frame.time, |_, group| {
-        let n = frame.positions.len();
-        write_dataset(group, "position", &flatten(frame.positions), n, 3)?;
-        for field in &frame.fields {
-            match field.data {
-                FieldData::Scalar(v) => write_dataset(group, field.name, v, n, 1)?,
-                FieldData::Vector(v) => write_dataset(group, field.name, &flatten(v), n, 3)?,
-            }
-        }
-        Ok(())
-    })
-}
-
-/// Appends the frame group `/frames/<name>` with attributes `time` and `step`, its content
-/// written by `write` (which also gets the file, for root attributes), built under
-/// [`PARTIAL`] and moved into place only when complete.
-pub(super) fn append_group(
-    path: &Path,
-    name: &str,
-    step: u64,
-    time: Real,
-    write: impl FnOnce(&File, &Group) -> Result<(), Failure>,
-) -> Result<(), Failure> {
-    let file = ctx(File::open_rw(path), || "opening for append".into())?;
-    {
-        let frames = ctx(file.group(FRAMES), || "opening /frames".into())?;
-        if frames.link_exists(name) {
-            return Err((
-                format!("appending frame {name}"),
-                "a frame of that name already exists".into(),
-            ));
-        }
-        // A leftover from a crashed append is incomplete by construction: drop it.
-        if file.link_exists(PARTIAL) {
-            ctx(file.unlink(PARTIAL), || {
-                "removing an incomplete frame".into()
-            })?;
-        }
-        let what = || format!("writing frame {name}");
-        {
-            let group = ctx(file.create_group(PARTIAL), what)?;
-            write_scalar_attr(&group, "time", &time)?;
-            write_scalar_attr(&group, "step", &step)?;
-            write(&file, &group)?;
-        }
-        ctx(file.relink(PARTIAL, &format!("{FRAMES}/{name}")), || {
-            format!("moving frame {name} into /{FRAMES}")
-        })?;
-    }
-    ctx(file.close(), || "closing file".into())
 }

@@ -1,4 +1,6 @@
-//! All grid frames of a run in one HDF5 file, laid out like the particle frames for h5py.
+//! All grid frames of a run behind one HDF5 index, laid out like the particle frames for h5py
+//! and as crash-safe (each frame its own file, linked from an index rewritten whole; see
+//! `super::hdf5_frames`).
 //!
 //! ```text
 //! /                         root attributes: `format` ("eddy-grid-frames"), `format_version` (1),
@@ -13,12 +15,12 @@
 //! `f["frames/000000/pressure"][i, j, k]` is the value at the cell centre
 //! `origin + spacing * (i + 0.5, j + 0.5, k + 0.5)`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use hdf5::Group;
 
-use super::hdf5_frames::{append_group, ctx, write_scalar_attr, Failure};
-use super::{AttrValue, GridFieldData, GridFrame, Hdf5Frames, IoError};
+use super::hdf5_frames::{ctx, write_scalar_attr, Failure, FrameIndex};
+use super::{AttrValue, GridFieldData, GridFrame, IoError};
 use crate::{Real, Vec3};
 
 /// Value of the root attribute `format`, so readers can tell grid files from particle files.
@@ -49,16 +51,15 @@ impl Geometry {
 
 /// All grid frames in one HDF5 file readable by h5py, one group `/frames/NNNNNN` (6-digit
 /// zero-padded frame index, counting from 0) per frame, with the same crash behaviour as
-/// [`Hdf5Frames`]: the file is opened and closed per frame, and a frame appears under `/frames`
-/// only when complete.
+/// [`super::Hdf5Frames`]: each frame is its own file, and the index lists a frame only when it
+/// is complete.
 ///
 /// The grid (origin, spacing, dims) is fixed by the first frame and stored as root attributes;
 /// a later frame on another grid is refused. HDF5 serializes all calls behind one global lock:
 /// append from one thread.
 #[derive(Debug)]
 pub struct Hdf5GridFrames {
-    path: PathBuf,
-    next_index: u64,
+    index: FrameIndex,
     /// Set once the first frame is in the file.
     geometry: Option<Geometry>,
 }
@@ -78,10 +79,8 @@ impl Hdf5GridFrames {
             ("format_version", AttrValue::Int(GRID_FORMAT_VERSION)),
         ];
         all.extend_from_slice(attributes);
-        Hdf5Frames::create(path, &all)?;
         Ok(Hdf5GridFrames {
-            path: path.to_path_buf(),
-            next_index: 0,
+            index: FrameIndex::create(path, &all)?,
             geometry: None,
         })
     }
@@ -89,12 +88,12 @@ impl Hdf5GridFrames {
     /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
     /// complete, so a failed append can be retried.
     pub fn append(&mut self, frame: &GridFrame) -> Result<(), IoError> {
-        frame.validate(&self.path)?;
+        frame.validate(&self.index.path)?;
         let geometry = Geometry::of(frame);
         if let Some(fixed) = self.geometry {
             if fixed != geometry {
                 return Err(IoError::invalid(
-                    &self.path,
+                    &self.index.path,
                     format!(
                         "grid frame has origin {:?}, spacing {}, dims {:?}, but the file's grid \
                          has origin {:?}, spacing {}, dims {:?}",
@@ -108,50 +107,34 @@ impl Hdf5GridFrames {
                 ));
             }
         }
-        let name = format!("{:06}", self.next_index);
-        // Until a frame is in, the geometry attributes are (re)written with each try, so a
-        // failed first append cannot leave a grid that no frame has.
-        let new_geometry = self.geometry.is_none().then_some(geometry);
-        append_group(&self.path, &name, frame.step, frame.time, |file, group| {
-            if let Some(g) = new_geometry {
-                write_geometry(file, &g)?;
-            }
-            write_fields(group, frame)
-        })
-        .map_err(|(action, message)| IoError::Hdf5 {
-            path: self.path.clone(),
-            action,
-            message,
-        })?;
+        self.index.append(
+            frame.step,
+            frame.time,
+            |root| write_geometry(root, &geometry),
+            |group| write_fields(group, frame),
+        )?;
         self.geometry = Some(geometry);
-        self.next_index += 1;
         Ok(())
     }
 
     /// Number of frames appended so far.
     pub fn len(&self) -> u64 {
-        self.next_index
+        self.index.len()
     }
 
     /// True before the first frame.
     pub fn is_empty(&self) -> bool {
-        self.next_index == 0
+        self.index.len() == 0
     }
 
-    /// The file's path.
+    /// The index file's path.
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.index.path
     }
 }
 
+/// The grid's root attributes, written into every index from the first frame on.
 fn write_geometry(root: &Group, g: &Geometry) -> Result<(), Failure> {
-    for name in ["origin", "spacing", "dims"] {
-        // A failed earlier try may have left some of them.
-        let what = || format!("replacing root attribute {name:?}");
-        if ctx(root.attr_names(), what)?.iter().any(|n| n == name) {
-            ctx(root.delete_attr(name), what)?;
-        }
-    }
     write_array_attr(root, "origin", &[g.origin.x, g.origin.y, g.origin.z])?;
     write_scalar_attr(root, "spacing", &g.spacing)?;
     write_array_attr(root, "dims", &g.dims.map(|n| n as u64))

@@ -232,10 +232,13 @@ impl GridFrames {
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
     const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
-    let numbered = |prefix: &str, ext: &str| {
-        name.strip_prefix(prefix)
-            .and_then(|rest| rest.strip_suffix(ext))
-            .is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()))
+    let six_digits =
+        |n: Option<&str>| n.is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()));
+    let numbered = |s: &str, prefix: &str, ext: &str| {
+        six_digits(
+            s.strip_prefix(prefix)
+                .and_then(|rest| rest.strip_suffix(ext)),
+        )
     };
     let unprefixed = name
         .strip_prefix("particles_")
@@ -243,8 +246,9 @@ pub fn is_run_output(name: &str) -> bool {
         .unwrap_or(name);
     FIXED.contains(&name)
         || ["metrics.csv", "probes.csv", "frames.h5"].contains(&unprefixed)
-        || numbered("particles_", ".vtp")
-        || numbered("grid_", ".vti")
+        || numbered(name, "particles_", ".vtp")
+        || numbered(name, "grid_", ".vti")
+        || numbered(unprefixed, "frames_", ".h5")
         || (name.starts_with("profile_") && name.ends_with(".csv"))
 }
 

@@ -8,7 +8,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use eddy::io::plot::{compare, RunSeries};
-use eddy::pipeline::{run, RunError, RunOptions};
+use eddy::pipeline::{run, Pipeline, Plan, RunError, RunOptions};
 use eddy::scene::parse_str;
 
 const TINY: &str = r#"name = "tiny"
@@ -244,4 +244,81 @@ fn hdf5_frames_survive_a_kill_at_any_point() {
     let with_frames = listed.iter().filter(|&&n| n > 0).count();
     assert!(with_frames >= 8, "{listed:?}");
     assert!(listed.windows(2).any(|w| w[1] > w[0]), "{listed:?}");
+}
+
+/// A scene too large for the machine is refused before anything is allocated, with the sizes
+/// and memory it would need; `--plan` states the estimate for every scene.
+#[test]
+fn a_scene_too_large_is_refused_up_front() {
+    let s = eddy::scene::load(&shipped("dam_break.toml"), &["fluid.spacing=1e-5".into()])
+        .expect("valid scene");
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || tx.send(Pipeline::build(&s).err().map(|e| e.to_string())));
+    let message = rx
+        .recv_timeout(Duration::from_secs(30))
+        .expect("refused within seconds, not after allocating")
+        .expect("refused");
+    assert!(
+        message.contains("fluid particles") && message.contains("has available"),
+        "{message}"
+    );
+    let s = eddy::scene::load(&shipped("dam_break.toml"), &[]).expect("valid scene");
+    let plan = Plan::of(&Pipeline::build(&s).expect("builds")).to_string();
+    let memory = plan.lines().next().expect("plan");
+    assert!(
+        memory.starts_with("memory: about") && memory.contains("fluid particles"),
+        "{plan}"
+    );
+}
+
+/// Messages a TOML user can act on: a duplicate key is named, a non-UTF-8 file gives the byte
+/// offset and line, a folder given as a mesh says so, and no Rust type name shows.
+#[test]
+fn messages_name_what_the_user_wrote() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let write = |name: &str, bytes: &[u8]| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).expect("scene file");
+        path
+    };
+    let load = |path: &Path| {
+        eddy::scene::load(path, &[])
+            .expect_err("refused")
+            .to_string()
+    };
+    let m = load(&write(
+        "dup.toml",
+        TINY.replace("[time]", "[time]\nend = 2.0").as_bytes(),
+    ));
+    assert!(m.contains("duplicate key `end`"), "{m}");
+    let mut bytes = b"name = \"tiny\"\n# caf".to_vec();
+    bytes.extend([0xff, 0xfe, b'\n']);
+    let m = load(&write("latin1.toml", &bytes));
+    assert!(
+        m.contains("not UTF-8") && m.contains("byte offset 19") && m.contains("line 2"),
+        "{m}"
+    );
+    let folder = dir.path().join("meshes");
+    std::fs::create_dir(&folder).expect("folder");
+    let text = TINY.replace(
+        "shape = { type = \"box\", half_extents = [0.1, 0.1, 0.1] }",
+        &format!(
+            "shape = {{ type = \"mesh\", path = {:?} }}",
+            folder.display().to_string()
+        ),
+    );
+    let m = load(&write("folder.toml", text.as_bytes()));
+    assert!(
+        m.contains("folder") && m.contains("obstacles[0].shape.path"),
+        "{m}"
+    );
+    let text = TINY.replace(
+        "shape = { type = \"box\", half_extents = [0.1, 0.1, 0.1] }",
+        "shape = 5",
+    );
+    let m = load(&write("five.toml", text.as_bytes()));
+    assert!(
+        m.contains("a table with a `type` key") && !m.contains("enum"),
+        "{m}"
+    );
 }

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use super::footprint::{available_memory, Footprint};
 use super::frames::{GridFrames, Kind, ParticleFrames};
 use super::simulation::{Simulation, StepError};
 use super::stages::{
@@ -21,6 +22,8 @@ use crate::{Real, Vec3};
 
 /// A scene ready to step: the simulation, its stages in order and its frame writers.
 pub struct Pipeline {
+    /// The memory estimate the scene was admitted with.
+    pub footprint: Footprint,
     pub sim: Simulation,
     pub stages: Vec<Box<dyn Stage>>,
     pub frames: Frames,
@@ -121,6 +124,14 @@ impl Pipeline {
                 scene.name
             )));
         }
+        let footprint = Footprint::of(scene, &build::bodies(scene)?);
+        if let Some(available) = available_memory().filter(|&a| footprint.bytes > a) {
+            return Err(RunError::TooLarge {
+                scene: scene.name.clone(),
+                footprint,
+                available,
+            });
+        }
         let both = has_sph && has_grid;
         let sph = has_sph.then(|| sph_solver(scene)).transpose()?;
         let grid = has_grid.then(|| grid_solver(scene)).transpose()?;
@@ -199,6 +210,7 @@ impl Pipeline {
             grid: None,
         };
         Ok(Self {
+            footprint,
             sim,
             stages,
             frames,

@@ -9,6 +9,7 @@
 
 mod build;
 mod driver;
+mod footprint;
 mod frames;
 mod plan;
 mod simulation;
@@ -18,6 +19,7 @@ use std::path::{Path, PathBuf};
 
 pub use build::{grid_solver, sph_solver, Frames, Pipeline};
 pub use driver::run_scene;
+pub use footprint::{available_memory, Footprint};
 pub use frames::{GridFrames, Kind, ParticleFrames};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
@@ -55,6 +57,16 @@ pub enum RunError {
     },
     #[error("{0}")]
     Unsupported(String),
+    #[error(
+        "scene '{scene}' needs {footprint}, more than the {} MiB this machine has available; \
+         coarsen fluid.spacing or grid.resolution",
+        (available / (1024.0 * 1024.0)).round()
+    )]
+    TooLarge {
+        scene: String,
+        footprint: Footprint,
+        available: f64,
+    },
     #[error("{option} = {value}: {allowed}")]
     InvalidOption {
         option: &'static str,

@@ -4,6 +4,7 @@
 use std::fmt;
 
 use super::build::Pipeline;
+use super::footprint::available_memory;
 
 /// One stage of a step, with the parts it runs inside.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -20,6 +21,8 @@ pub struct Plan {
     pub stages: Vec<PlannedStage>,
     pub outputs: Vec<(&'static str, String)>,
     pub clock: String,
+    /// The memory estimate, one line.
+    pub memory: String,
 }
 
 impl Plan {
@@ -59,10 +62,19 @@ impl Plan {
                   land on the end time"
                 .to_owned(),
         };
+        let memory = match available_memory() {
+            Some(a) => format!(
+                "{} ({:.0} MiB available)",
+                p.footprint,
+                a / (1024.0 * 1024.0)
+            ),
+            None => p.footprint.to_string(),
+        };
         Plan {
             stages,
             outputs,
             clock,
+            memory,
         }
     }
 
@@ -86,6 +98,7 @@ impl Plan {
 
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "memory: {}", self.memory)?;
         writeln!(f, "clock: {}", self.clock)?;
         writeln!(f, "each step, in order:")?;
         for (i, s) in self.stages.iter().enumerate() {

@@ -14,9 +14,20 @@ use super::{Body, Scene, SceneError, Shape};
 /// `overrides` are `dotted.key=value` assignments as given to `eddy run --set`, applied in order.
 /// Relative mesh paths come back absolute, resolved against the scene file's folder.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         file: path.to_owned(),
         source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let valid = std::str::from_utf8(&e.as_bytes()[..at]).unwrap_or_default();
+        let (line, column) = line_col(valid, at);
+        SceneError::Syntax {
+            file: path.to_owned(),
+            line,
+            column,
+            message: format!("the file is not UTF-8 text (byte offset {at})"),
+        }
     })?;
     parse_str(&text, path, overrides)
 }
@@ -119,11 +130,20 @@ impl Scene {
 fn syntax_error(file: &Path, text: &str, error: &toml::de::Error) -> SceneError {
     let offset = error.span().map_or(text.len(), |span| span.start);
     let (line, column) = line_col(text, offset);
+    let mut message = error.message().to_owned();
+    if message == "duplicate key" {
+        // toml points at the second occurrence: name the key written there.
+        let rest = &text[offset.min(text.len())..];
+        let key = rest.split(['=', '\n']).next().unwrap_or("").trim();
+        if !key.is_empty() {
+            message = format!("duplicate key `{key}`");
+        }
+    }
     SceneError::Syntax {
         file: file.to_owned(),
         line,
         column,
-        message: error.message().to_owned(),
+        message,
     }
 }
 
@@ -146,8 +166,11 @@ fn deserialize(text: &str, file: &Path, located: bool) -> Result<Scene, SceneErr
     })
 }
 
-/// serde says "field" where a TOML user says "key".
+/// serde says "field" where a TOML user says "key", and names Rust types a user never wrote.
 fn key_wording(message: &str) -> String {
+    if let Some((head, _)) = message.split_once("internally tagged enum") {
+        return format!("{head}a table with a `type` key");
+    }
     for (serde, user) in [
         ("unknown field ", "unknown key "),
         ("missing field ", "missing key "),

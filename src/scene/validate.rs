@@ -353,6 +353,13 @@ impl Checker<'_> {
                 positive("scale", *scale)?;
                 // `load` made the path absolute; resolve again for scenes built in code.
                 let resolved = base_dir(self.file).join(path);
+                if resolved.is_dir() {
+                    return Err(self.invalid(
+                        format!("{key}.path"),
+                        resolved.display(),
+                        "an OBJ or STL file (this is a folder)",
+                    ));
+                }
                 if !resolved.is_file() {
                     return Err(SceneError::MissingMesh {
                         file: self.file.to_owned(),

@@ -322,3 +322,64 @@ fn messages_name_what_the_user_wrote() {
         "{m}"
     );
 }
+
+/// Input that was accepted and should not be: an obstacle or keyframe outside the domain, a
+/// fluid block too thin to hold a particle, and inflow into a grid with no way out.
+#[test]
+fn impossible_set_ups_are_refused() {
+    let refuse = |text: String, key: &str| {
+        let m = parse_str(&text, Path::new("tiny.toml"), &[])
+            .expect_err(key)
+            .to_string();
+        assert!(m.contains(key), "{key}: {m}");
+    };
+    refuse(
+        TINY.replace("position = [0.8, 0.8, 0.8]", "position = [0.8, -8.0, 0.8]"),
+        "obstacles[0].position[1]",
+    );
+    refuse(
+        TINY.replace(
+            "position = [0.8, 0.8, 0.8]",
+            "position = [0.8, 0.8, 0.8]\nmotion = { keyframes = [{ t = 0.0, position = [0.8, 0.8, 0.8] }, \
+             { t = 1.0, position = [0.8, 0.8, 3.0] }] }",
+        ),
+        "obstacles[0].motion.keyframes[1].position[2]",
+    );
+    refuse(
+        TINY.replace("max = [0.5, 0.5, 0.5]", "max = [0.5, 0.03, 0.5]"),
+        "fluid.blocks[0].max[1]",
+    );
+    let grid = |boundary: &str| {
+        format!(
+            "name = \"g\"\n[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[time]\nend = 1.0\n\
+             [grid]\nresolution = [8, 8, 8]\nboundary = {{ {boundary} }}\n"
+        )
+    };
+    refuse(
+        grid("x_min = { inflow = [1.0, 0.0, 0.0] }"),
+        "grid.boundary",
+    );
+    for ok in [
+        "x_min = { inflow = [1.0, 0.0, 0.0] }, x_max = \"open\"",
+        "x_min = { inflow = [1.0, 0.0, 0.0] }, x_max = { inflow = [1.0, 0.0, 0.0] }",
+    ] {
+        parse_str(&grid(ok), Path::new("g.toml"), &[]).expect(ok);
+    }
+}
+
+/// The refinement scenes write frames by default: a user wants to look at them.
+#[test]
+fn refinement_scenes_write_frames() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&dir).expect("scenes") {
+        let path = entry.expect("entry").path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.starts_with("refine_") && name.ends_with(".toml") {
+            let s = eddy::scene::load(&path, &[]).expect("shipped scene loads");
+            assert!(s.output.vtk, "{name} writes no frames");
+            checked += 1;
+        }
+    }
+    assert!(checked >= 9);
+}

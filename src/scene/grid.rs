@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::validate::{Checker, Interval};
-use super::{Scene, SceneError, Shape};
+use super::{Number, Scene, SceneError, Shape};
 pub use crate::grid::{Advection, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
 use crate::Real;
 
@@ -91,6 +91,38 @@ impl Grid {
 }
 
 impl Scene {
+    /// Incompressible fluid in a domain without an open side must take in what it lets out:
+    /// inflows that do not balance leave the projection an impossible system (the divergence
+    /// sticks at net inflow / volume).
+    fn check_net_inflow(&self, c: &Checker, sides: &[[GridSide; 2]; 3]) -> Result<(), SceneError> {
+        if sides.iter().flatten().any(|s| *s == GridSide::Open) {
+            return Ok(());
+        }
+        let extent: [Real; 3] = std::array::from_fn(|a| self.domain.max[a] - self.domain.min[a]);
+        let (mut net, mut scale) = (0.0, 0.0);
+        for (axis, pair) in sides.iter().enumerate() {
+            let area = extent[(axis + 1) % 3] * extent[(axis + 2) % 3];
+            for (s, side) in pair.iter().enumerate() {
+                if let GridSide::Inflow(v) = side {
+                    let inward = if s == 0 { v[axis] } else { -v[axis] };
+                    net += inward * area;
+                    scale += inward.abs() * area;
+                }
+            }
+        }
+        if net.abs() > 1e-9 * scale {
+            return Err(c.invalid(
+                "grid.boundary",
+                format!(
+                    "inflows bringing {} m^3/s into a closed domain",
+                    Number(net)
+                ),
+                "an \"open\" side for the flow to leave by, or inflows that balance",
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks the `[grid]` section.
     pub(super) fn validate_grid(&self, c: &Checker) -> Result<(), SceneError> {
         let Some(grid) = &self.grid else {
@@ -159,6 +191,7 @@ impl Scene {
                 }
             }
         }
+        self.check_net_inflow(c, &sides)?;
         c.num("grid.density", grid.density, Interval::gt(0.0))?;
         c.vec3("grid.initial_velocity", grid.initial_velocity)?;
         c.num(

@@ -38,6 +38,16 @@ impl Scene {
             for (i, block) in fluid.blocks.iter().enumerate() {
                 let key = format!("fluid.blocks[{i}]");
                 c.inside_box(&key, block.min, block.max, &self.domain)?;
+                if let Some(axis) = (0..3).find(|&a| block.max[a] - block.min[a] < fluid.spacing) {
+                    return Err(c.invalid(
+                        format!("{key}.max[{axis}]"),
+                        Number(block.max[axis]),
+                        format!(
+                            "at least {} (min + fluid.spacing): a thinner block holds no particle",
+                            Number(block.min[axis] + fluid.spacing)
+                        ),
+                    ));
+                }
                 c.vec3(&format!("{key}.velocity"), block.velocity)?;
             }
         }
@@ -54,6 +64,14 @@ impl Scene {
         let mut body_names: Vec<(&str, String)> = Vec::new();
         for (key, body) in bodies {
             c.body(&key, body)?;
+            // A body placed outside the domain is a typo (a lost minus sign, the wrong unit).
+            if body.motion.keyframes.is_empty() {
+                self.point_inside(&c, &format!("{key}.position"), &body.position)?;
+            }
+            for (i, frame) in body.motion.keyframes.iter().enumerate() {
+                let k = format!("{key}.motion.keyframes[{i}].position");
+                self.point_inside(&c, &k, &frame.position)?;
+            }
             if let Some(name) = &body.name {
                 if let Some((_, first)) = body_names.iter().find(|(n, _)| *n == name.as_str()) {
                     return Err(c.invalid(

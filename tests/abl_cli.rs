@@ -186,3 +186,28 @@ fn bad_files_and_arguments_fail_with_a_message() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("expected three finite numbers"), "{err}");
 }
+
+/// `--csv -` writes the same CSV to standard output, and a vector may start with a minus sign
+/// as written (`--velocity -1,0,0`).
+#[test]
+fn lookup_writes_to_standard_output() {
+    let _guard = common::hdf5_or_child();
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let (_, db) = database(tmp.path());
+    let csv = tmp.path().join("omega.csv");
+    let db = db.to_str().expect("utf-8 path");
+    let args =
+        |target: &str| ["lookup", db, "--velocity", "-1,0,0", "--csv", target].map(String::from);
+    let to_file = eddy(
+        &args(csv.to_str().expect("utf-8 path"))
+            .each_ref()
+            .map(|s| s.as_str()),
+    );
+    assert!(to_file.status.success(), "{to_file:?}");
+    let to_stdout = eddy(&args("-").each_ref().map(|s| s.as_str()));
+    assert!(to_stdout.status.success(), "{to_stdout:?}");
+    let text = std::fs::read_to_string(&csv).expect("the CSV exists");
+    assert_eq!(String::from_utf8_lossy(&to_stdout.stdout), text);
+    assert!(text.ends_with('\n') && text.lines().count() == POINTS + 1);
+    assert!(!tmp.path().join("-").exists());
+}

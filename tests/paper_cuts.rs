@@ -383,3 +383,35 @@ fn refinement_scenes_write_frames() {
     }
     assert!(checked >= 9);
 }
+
+/// The resolved `scene.toml` records `--until` and `--steps`: rerunning it reproduces the run.
+#[test]
+fn the_resolved_scene_records_until_and_steps() {
+    let _serial = common::hdf5_or_child();
+    for (until, steps) in [(Some(0.05), None), (None, Some(4))] {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let options = RunOptions {
+            out: Some(dir.path().join("first")),
+            overrides: vec!["output.vtk=false".into()],
+            until,
+            steps,
+            ..RunOptions::default()
+        };
+        let first = run(&shipped("dam_break.toml"), &options).expect("runs");
+        let resolved = dir.path().join("first/scene.toml");
+        let again = RunOptions {
+            out: Some(dir.path().join("again")),
+            ..RunOptions::default()
+        };
+        let second = run(&resolved, &again).expect("the resolved scene runs");
+        assert_eq!((second.steps, second.time), (first.steps, first.time));
+        let metrics = |run: &str| {
+            let text =
+                std::fs::read_to_string(dir.path().join(run).join("metrics.csv")).expect("metrics");
+            text.lines()
+                .map(|l| l.split(',').take(5).collect::<Vec<_>>().join(","))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(metrics("first"), metrics("again"));
+    }
+}

@@ -353,10 +353,13 @@ fn keyframes_must_increase() {
 fn end_or_steps_required() {
     let text = MINIMAL.replace("end = 1.0", "cfl = 0.5");
     let m = message(parse(&text));
-    assert_contains(&m, &["tiny.toml", "time.end", "time.steps", "exactly one"]);
+    assert_contains(&m, &["tiny.toml", "time.end", "time.steps", "at least one"]);
+    // Both: the run ends at whichever comes first (a resolved scene of a `--steps` run).
     let text = MINIMAL.replace("end = 1.0", "end = 1.0\nsteps = 10");
-    let m = message(parse(&text));
-    assert_contains(&m, &["time.end", "time.steps", "both"]);
+    let s = parse(&text).expect("end and steps together");
+    assert_eq!((s.time.end, s.time.steps), (Some(1.0), Some(10)));
+    let m = message(parse(&MINIMAL.replace("end = 1.0", "end = 1.0\nsteps = 0")));
+    assert_contains(&m, &["time.steps", ">= 1"]);
 }
 
 #[test]

@@ -37,9 +37,9 @@ struct RunArgs {
     /// Keep the directions already finished in the output (or by an interrupted run).
     #[arg(long)]
     resume: bool,
-    /// Directions computed at once, one thread each (default: the number of cores).
-    #[arg(long)]
-    jobs: Option<usize>,
+    /// Directions computed at once, one thread each, at least 1 (default: the number of cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    jobs: Option<u64>,
 }
 
 #[derive(Subcommand)]
@@ -74,6 +74,7 @@ fn main() -> anyhow::Result<()> {
             let spec = ObstacleSpec::load(&args.obstacle, &args.set)?;
             let workers = args
                 .jobs
+                .map(|n| n as usize)
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             let options = RunOptions {
                 out: args.out,

@@ -1,5 +1,6 @@
 //! `eddy lookup` and `eddy info`: query and summarise a database from the command line.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use eddy::abl::{AblDatabase, MotionKind};
@@ -16,7 +17,8 @@ pub struct LookupArgs {
     /// Object angular velocity, object frame, rad/s: x,y,z.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
     pub angular: Vec3,
-    /// Write x, y, z, nx, ny, nz, omega_x, omega_y, omega_z per boundary point here.
+    /// Write x, y, z, nx, ny, nz, omega_x, omega_y, omega_z per boundary point here (`-`:
+    /// standard output).
     #[arg(long)]
     pub csv: PathBuf,
 }
@@ -44,7 +46,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 pub fn lookup(args: &LookupArgs) -> anyhow::Result<()> {
     let db = AblDatabase::open(&args.database, None)?;
     let omega = db.lookup(&args.velocity, &args.angular);
-    eddy::io::write_atomic(&args.csv, |out| {
+    let write = |out: &mut dyn std::io::Write| -> std::io::Result<()> {
         writeln!(out, "x,y,z,nx,ny,nz,omega_x,omega_y,omega_z")?;
         for ((p, n), w) in db.points().iter().zip(db.normals()).zip(&omega) {
             writeln!(
@@ -54,7 +56,13 @@ pub fn lookup(args: &LookupArgs) -> anyhow::Result<()> {
             )?;
         }
         Ok(())
-    })?;
+    };
+    if args.csv.as_os_str() == "-" {
+        let mut stdout = std::io::stdout().lock();
+        write(&mut stdout).and_then(|()| stdout.flush())?;
+    } else {
+        eddy::io::write_atomic(&args.csv, write)?;
+    }
     eprintln!(
         "eddy: {} boundary points -> {}",
         omega.len(),

@@ -33,6 +33,7 @@ struct End {
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
     let started = Instant::now();
     options.check()?;
+    let scene = &options.apply(scene);
     let out = output_dir(scene, options);
     std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
         path: out.clone(),
@@ -56,14 +57,8 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
     })?;
     p.open(&out)?;
     let end = End {
-        time: [scene.time.end, options.until]
-            .into_iter()
-            .flatten()
-            .reduce(Real::min),
-        steps: [scene.time.steps, options.steps]
-            .into_iter()
-            .flatten()
-            .min(),
+        time: scene.time.end,
+        steps: scene.time.steps,
         steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
     };
     let plan = Plan::of(&p);

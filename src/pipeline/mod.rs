@@ -130,6 +130,16 @@ impl RunOptions {
         }
         Ok(())
     }
+
+    /// `scene` with `until` and `steps` folded into its `[time]` (each the earlier of the two
+    /// ends), so the resolved scene written beside a run's outputs reproduces the run.
+    pub fn apply(&self, scene: &Scene) -> Scene {
+        let mut scene = scene.clone();
+        let t = &mut scene.time;
+        t.end = [t.end, self.until].into_iter().flatten().reduce(Real::min);
+        t.steps = [t.steps, self.steps].into_iter().flatten().min();
+        scene
+    }
 }
 
 /// Loads `path` with the options' overrides, ready to run; checks the options too.

@@ -76,10 +76,11 @@ pub struct Domain {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeStepping {
-    /// Simulated end time, s. Exactly one of `end` and `steps` is given.
+    /// Simulated end time, s. At least one of `end` and `steps` is given; with both the run
+    /// ends at whichever comes first.
     #[serde(default)]
     pub end: Option<Real>,
-    /// Number of steps. Exactly one of `end` and `steps` is given.
+    /// Number of steps (see `end`).
     #[serde(default)]
     pub steps: Option<u64>,
     /// CFL factor: dt = cfl * spacing / max speed. In (0, 1].

@@ -105,27 +105,20 @@ impl Scene {
 
     fn validate_time(&self, c: &Checker) -> Result<(), SceneError> {
         let time = &self.time;
-        match (time.end, time.steps) {
-            (Some(end), None) => c.num("time.end", end, Interval::gt(0.0))?,
-            (None, Some(steps)) => {
-                if steps < 1 {
-                    return Err(c.invalid("time.steps", steps, ">= 1"));
-                }
-            }
-            (Some(_), Some(_)) => {
-                return Err(c.invalid(
-                    "time.end, time.steps",
-                    "both given",
-                    "exactly one of `time.end` and `time.steps`",
-                ))
-            }
-            (None, None) => {
-                return Err(c.invalid(
-                    "time.end, time.steps",
-                    "neither given",
-                    "exactly one of `time.end` (> 0, s) and `time.steps` (>= 1)",
-                ))
-            }
+        // With both, the run ends at whichever comes first (a resolved scene run with
+        // `--steps` records both).
+        if time.end.is_none() && time.steps.is_none() {
+            return Err(c.invalid(
+                "time.end, time.steps",
+                "neither given",
+                "at least one of `time.end` (> 0, s) and `time.steps` (>= 1)",
+            ));
+        }
+        if let Some(end) = time.end {
+            c.num("time.end", end, Interval::gt(0.0))?;
+        }
+        if time.steps == Some(0) {
+            return Err(c.invalid("time.steps", 0, ">= 1"));
         }
         c.num("time.cfl", time.cfl, Interval::open_closed(0.0, 1.0))?;
         c.num("time.dt_min", time.dt_min, Interval::gt(0.0))?;

@@ -1,6 +1,7 @@
 //! The MAC-grid solver's parameters: plain data with their defaults. The scene's `[grid]`
 //! section deserializes its boundary, advection, viscosity and smoke settings into the types
-//! here, and `crate::scene::build` assembles a [`GridParams`] from a resolved scene.
+//! here, and the scene builder (`src/scene/build.rs`) assembles a [`GridParams`] from a
+//! resolved scene.
 
 use serde::{Deserialize, Serialize};
 

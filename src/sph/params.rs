@@ -1,6 +1,6 @@
 //! The SPH solver's parameters: plain data with the papers' defaults. The scene's `[fluid]`,
 //! `[pressure]` and `[viscosity]` sections deserialize into the section types here, and
-//! `crate::scene::build` assembles a [`SphParams`] from a resolved scene.
+//! the scene builder (`src/scene/build.rs`) assembles a [`SphParams`] from a resolved scene.
 
 use serde::{Deserialize, Serialize};
 

@@ -174,11 +174,6 @@ impl GridSolver {
         })
     }
 
-    /// The parameters the solver was built from (with the solver tolerance as last set).
-    pub fn params(&self) -> &GridParams {
-        &self.params
-    }
-
     /// Simulated time, s.
     pub fn time(&self) -> Real {
         self.time

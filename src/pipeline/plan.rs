@@ -89,11 +89,6 @@ impl Plan {
             })
             .collect()
     }
-
-    /// True when a step runs a stage of this name.
-    pub fn has(&self, name: &str) -> bool {
-        self.stages.iter().any(|s| s.name == name)
-    }
 }
 
 impl fmt::Display for Plan {

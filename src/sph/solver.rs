@@ -171,16 +171,6 @@ impl SphSolver {
         me
     }
 
-    /// The attached hooks, in the order they run.
-    pub fn hooks(&self) -> &[Box<dyn StepHook>] {
-        &self.hooks
-    }
-
-    /// The parameters the solver was built from.
-    pub fn params(&self) -> &SphParams {
-        &self.params
-    }
-
     /// Simulated time, s.
     pub fn time(&self) -> Real {
         self.time

@@ -11,6 +11,7 @@ use super::stages::{
     StepRecord,
 };
 use super::RunError;
+use crate::geometry::RigidBody;
 use crate::grid::GridSolver;
 use crate::io::{AttrValue, IoError};
 use crate::metrics::Probe;
@@ -93,6 +94,16 @@ impl Frames {
 
 /// The SPH fluid of `scene` with its bodies and its refinement attached as a step hook.
 pub fn sph_solver(scene: &Scene) -> Result<SphSolver, RunError> {
+    sph_among(scene, build::bodies(scene)?)
+}
+
+/// The MAC grid of `scene` with its obstacles.
+pub fn grid_solver(scene: &Scene) -> Result<GridSolver, RunError> {
+    grid_among(scene, build::bodies(scene)?)
+}
+
+/// [`sph_solver`] with the scene's bodies already built.
+fn sph_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<SphSolver, RunError> {
     let params = build::sph_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name)))?;
     let refinement = |n| {
@@ -100,18 +111,14 @@ pub fn sph_solver(scene: &Scene) -> Result<SphSolver, RunError> {
             .into_iter()
             .collect()
     };
-    Ok(SphSolver::with_hooks(
-        &params,
-        build::bodies(scene)?,
-        refinement,
-    ))
+    Ok(SphSolver::with_hooks(&params, bodies, refinement))
 }
 
-/// The MAC grid of `scene` with its obstacles.
-pub fn grid_solver(scene: &Scene) -> Result<GridSolver, RunError> {
+/// [`grid_solver`] with the scene's bodies already built.
+fn grid_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<GridSolver, RunError> {
     let params = build::grid_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name)))?;
-    GridSolver::new(&params, build::bodies(scene)?).map_err(|e| RunError::Setup(Box::new(e)))
+    GridSolver::new(&params, bodies).map_err(|e| RunError::Setup(Box::new(e)))
 }
 
 impl Pipeline {
@@ -124,7 +131,9 @@ impl Pipeline {
                 scene.name
             )));
         }
-        let footprint = Footprint::of(scene, &build::bodies(scene)?);
+        // Built once (meshes are read here) for the estimate and both solvers.
+        let bodies = build::bodies(scene)?;
+        let footprint = Footprint::of(scene, &bodies);
         if let Some(available) = available_memory().filter(|&a| footprint.bytes > a) {
             return Err(RunError::TooLarge {
                 scene: scene.name.clone(),
@@ -133,8 +142,10 @@ impl Pipeline {
             });
         }
         let both = has_sph && has_grid;
-        let sph = has_sph.then(|| sph_solver(scene)).transpose()?;
-        let grid = has_grid.then(|| grid_solver(scene)).transpose()?;
+        let sph = has_sph
+            .then(|| sph_among(scene, bodies.clone()))
+            .transpose()?;
+        let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let sim = Simulation::new(sph, grid);
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
         let probes = &scene.probes;

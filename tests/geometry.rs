@@ -23,6 +23,7 @@ fn body(shape: Shape) -> Body {
         position: [0.3, -0.2, 0.5],
         rotation: [0.4, -0.7, 0.25],
         motion: Motion::default(),
+        abl: None,
     }
 }
 

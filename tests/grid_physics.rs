@@ -245,6 +245,7 @@ fn bad_grid_input_is_reported() {
         position: [0.5, 0.5, 0.5],
         rotation: [0.0; 3],
         motion: Default::default(),
+        abl: None,
     });
     match GridSolver::new(
         &grid_params(&s).expect("a grid"),

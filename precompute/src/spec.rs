@@ -248,6 +248,7 @@ impl ObstacleSpec {
                 angular,
                 ..Default::default()
             },
+            abl: None,
         }
     }
 

@@ -10,11 +10,16 @@ mod database;
 mod error;
 mod fingerprint;
 mod format;
+pub mod params;
 mod quad;
 mod sampling;
+pub mod seeding;
+pub mod wall;
 
 pub use database::AblDatabase;
 pub use error::AblError;
 pub use fingerprint::{geometry_fingerprint, hash_hex};
 pub use format::{AblData, AblHeader, DirectionTable, MotionKind, ABL_FORMAT, ABL_FORMAT_VERSION};
+pub use params::{AblSettings, Seeding, TurbulenceParams};
 pub use sampling::Sampling;
+pub use wall::WallLayer;

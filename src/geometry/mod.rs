@@ -16,7 +16,7 @@ use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, Shape as ParryShape, T
 
 use crate::{Point3, Real, Vec3};
 use motion::Kinematics;
-pub use spec::{Body, Keyframe, Motion, Shape};
+pub use spec::{AblLink, Body, Keyframe, Motion, Shape};
 
 /// Why a body could not be built from its scene entry. Every message names the body, and the
 /// file where there is one.

@@ -25,6 +25,18 @@ pub struct Body {
     /// Kinematic motion; static when left out.
     #[serde(default)]
     pub motion: Motion,
+    /// The artificial-boundary-layer database this obstacle sheds turbulence from (obstacles
+    /// of grid scenes only; the scene refuses it elsewhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub abl: Option<AblLink>,
+}
+
+/// An obstacle's link to its precomputed boundary layer (Pfaff et al. 2009, section 5.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AblLink {
+    /// The database `eddy-precompute` wrote for this obstacle, relative to the scene file.
+    pub database: PathBuf,
 }
 
 /// Shapes, after parry3d's conventions: cylinders and capsules lie along the local y axis.

@@ -311,13 +311,7 @@ impl Boundaries {
 fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real) -> Array3<u16> {
     let mut owner = Array3::from_elem(grid.dims, FLUID);
     for (index, body) in bodies.iter().enumerate() {
-        let (lo, hi) = world_aabb(body, t);
-        let range = |a: usize| {
-            let g0 = ((lo[a] - grid.origin[a]) / grid.dx - 0.5).floor().max(0.0) as usize;
-            let g1 = ((hi[a] - grid.origin[a]) / grid.dx + 0.5).ceil().max(0.0) as usize;
-            g0.min(grid.dims[a])..g1.min(grid.dims[a])
-        };
-        let (rx, ry, rz) = (range(0), range(1), range(2));
+        let [rx, ry, rz] = cells_near(grid, body, t, 0.0);
         let (x0, y0, z0) = (rx.start, ry.start, rz.start);
         let pose = body.pose(t);
         Zip::indexed(owner.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), o| {
@@ -329,6 +323,26 @@ fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real) -> Array3<u16> {
         });
     }
     owner
+}
+
+/// The ranges of cell indices whose centres may lie within `margin` (m) of `body` at time `t`
+/// (its world bounding box, widened by half a cell).
+pub(super) fn cells_near(
+    grid: &MacGrid,
+    body: &RigidBody,
+    t: Real,
+    margin: Real,
+) -> [std::ops::Range<usize>; 3] {
+    let (lo, hi) = world_aabb(body, t);
+    std::array::from_fn(|a| {
+        let g0 = ((lo[a] - margin - grid.origin[a]) / grid.dx - 0.5)
+            .floor()
+            .max(0.0) as usize;
+        let g1 = ((hi[a] + margin - grid.origin[a]) / grid.dx + 0.5)
+            .ceil()
+            .max(0.0) as usize;
+        g0.min(grid.dims[a])..g1.min(grid.dims[a])
+    })
 }
 
 /// The world-space bounding box of a body at time `t`.

@@ -22,6 +22,7 @@ mod stencil;
 mod transfer;
 pub mod viscosity;
 pub mod vortex_coupling;
+pub mod walls;
 
 pub use average::RunningAverage;
 pub use boundary::Boundaries;

@@ -664,6 +664,7 @@ fn source_region(
             position: source.position,
             rotation: source.rotation,
             motion: Motion::default(),
+            abl: None,
         },
         index,
     )?;

@@ -84,14 +84,17 @@ impl RunSeries {
     }
 }
 
-/// The panels of the comparison: title and the metrics.csv columns summed into it.
-const PANELS: [(&str, &[&str]); 3] = [
+/// The panels of the comparison: title and the metrics.csv columns summed into it. A panel
+/// no run has a column for is left out (the vortex panels belong to boundary-layer runs).
+const PANELS: [(&str, &[&str]); 5] = [
     (
         "kinetic energy, linear + rotational (J)",
         &["kinetic_energy", "rotational_energy"],
     ),
     ("total energy (J)", &["total_energy"]),
     ("mean vorticity magnitude (1/s)", &["vorticity_mean"]),
+    ("vortex particles", &["vortex_particles"]),
+    ("vortex kernel energy (m^5/s^2)", &["vortex_energy"]),
 ];
 
 fn register_bundled_font() {
@@ -120,12 +123,22 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
         .unwrap_or_else(|| "plot.png".into());
     let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
     let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    let panels: Vec<_> = PANELS
+        .iter()
+        .filter(|(_, columns)| runs.iter().any(|r| r.curve(columns).is_some()))
+        .collect();
+    let panels = if panels.is_empty() {
+        vec![&PANELS[0]]
+    } else {
+        panels
+    };
     let skipped = {
-        let root = BitMapBackend::new(&tmp, (1200, 1200)).into_drawing_area();
+        let height = 400 * panels.len() as u32;
+        let root = BitMapBackend::new(&tmp, (1200, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let areas = root.split_evenly((PANELS.len(), 1));
+        let areas = root.split_evenly((panels.len(), 1));
         let mut skipped = 0;
-        for (area, (title, columns)) in areas.iter().zip(PANELS) {
+        for (area, &&(title, columns)) in areas.iter().zip(&panels) {
             let curves: Vec<(usize, Vec<(Real, Real)>)> = runs
                 .iter()
                 .enumerate()

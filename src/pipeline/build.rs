@@ -4,12 +4,13 @@
 use std::path::Path;
 
 use super::footprint::{available_memory, Footprint};
-use super::frames::{GridFrames, Kind, ParticleFrames};
+use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames};
 use super::simulation::{Simulation, StepError};
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
     StepRecord,
 };
+use super::turbulence::GridTurbulence;
 use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::GridSolver;
@@ -42,6 +43,7 @@ pub struct Frames {
     both: bool,
     pub particles: Option<ParticleFrames>,
     pub grid: Option<GridFrames>,
+    pub vortices: Option<VortexFrames>,
 }
 
 impl Frames {
@@ -51,7 +53,10 @@ impl Frames {
             w.write(sph)?;
         }
         if let (Some(w), Some(grid)) = (self.grid.as_mut(), sim.grid.as_ref()) {
-            w.write(grid)?;
+            w.write(grid, sim.turbulence.as_ref())?;
+        }
+        if let (Some(w), Some(t)) = (self.vortices.as_mut(), sim.turbulence.as_ref()) {
+            w.write(&t.vortices, sim.steps, sim.time)?;
         }
         Ok(())
     }
@@ -70,6 +75,15 @@ impl Frames {
             (sim.sph.is_some(), Kind::Particles, "particles"),
             (sim.grid.is_some(), Kind::Grid, "grid"),
         ];
+        if sim.turbulence.is_some() && self.vtk {
+            out.push((
+                "vtk",
+                format!("vortex particles + vortices.pvd every {} s", self.interval),
+            ));
+        }
+        if sim.turbulence.is_some() && self.hdf5 {
+            out.push(("hdf5", format!("vortices.h5 every {} s", self.interval)));
+        }
         for (_, kind, name) in kinds.iter().filter(|k| k.0) {
             if self.vtk {
                 out.push((
@@ -146,8 +160,25 @@ impl Pipeline {
             .then(|| sph_among(scene, bodies.clone()))
             .transpose()?;
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
-        let sim = Simulation::new(sph, grid);
+        let mut sim = Simulation::new(sph, grid);
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+        let turbulence = match (build::abl_settings(scene), scene.grid.as_ref()) {
+            (Some(settings), Some(grid)) => {
+                let shapes: Vec<_> = scene
+                    .container
+                    .iter()
+                    .chain(&scene.obstacles)
+                    .map(|b| b.shape.clone())
+                    .collect();
+                Some(GridTurbulence::build(
+                    settings,
+                    &mut sim,
+                    &shapes,
+                    grid.advection,
+                )?)
+            }
+            _ => None,
+        };
         let probes = &scene.probes;
         let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
         if sim.sph.is_some() && !probes.is_empty() {
@@ -175,6 +206,9 @@ impl Pipeline {
         if sim.sph.is_some() {
             stages.push(Box::new(SphStep));
             stages.push(Box::new(SphNeighbours));
+        }
+        if let Some(t) = turbulence {
+            stages.push(Box::new(t));
         }
         if sim.grid.is_some() {
             stages.push(Box::new(GridStep));
@@ -219,6 +253,7 @@ impl Pipeline {
             both,
             particles: None,
             grid: None,
+            vortices: None,
         };
         Ok(Self {
             footprint,
@@ -279,6 +314,9 @@ impl Pipeline {
         if self.sim.grid.is_some() {
             let name = hdf5(Kind::Grid);
             f.grid = Some(GridFrames::new(out, f.vtk, name.as_deref(), &f.attrs)?);
+        }
+        if self.sim.turbulence.is_some() {
+            f.vortices = Some(VortexFrames::new(out, f.vtk, f.hdf5, &f.attrs)?);
         }
         Ok(())
     }

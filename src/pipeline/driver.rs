@@ -136,6 +136,7 @@ fn stopped(e: StepError, frames: usize, out: &Path) -> RunError {
             out,
         },
         StepError::Io(e) => RunError::Io(e),
+        StepError::Vortex(e) => RunError::Vortex(e),
     }
 }
 

@@ -3,12 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
+use super::turbulence::Turbulence;
 use crate::grid::{forces::vorticity, GridSolver};
 use crate::io::{
     write_grid_vtk, write_particles_vtk, AttrValue, Field, GridField, GridFrame, Hdf5Frames,
     Hdf5GridFrames, IoError, ParticleFrame, PvdSeries,
 };
 use crate::sph::SphSolver;
+use crate::vortex::VortexParticles;
 use crate::Real;
 
 /// Where each kind of output goes: a scene with one solver keeps the plain names
@@ -155,8 +157,13 @@ impl GridFrames {
         }))
     }
 
-    /// Velocity, vorticity, pressure, smoke, temperature and the obstacle cells.
-    pub fn write(&mut self, solver: &GridSolver) -> Result<(), IoError> {
+    /// Velocity, vorticity, pressure, smoke, temperature, the obstacle cells and, with
+    /// `turbulence`, the boundary-layer field `abl_vorticity`.
+    pub fn write(
+        &mut self,
+        solver: &GridSolver,
+        turbulence: Option<&Turbulence>,
+    ) -> Result<(), IoError> {
         let w = &mut self.0;
         if !w.any() {
             return Ok(());
@@ -176,6 +183,13 @@ impl GridFrames {
             GridField::scalar("pressure", solver.pressure.view()),
             GridField::scalar("solid", solid.view()),
         ];
+        if let Some(t) = turbulence {
+            let [x, y, z] = &t.abl;
+            fields.push(GridField::vector(
+                "abl_vorticity",
+                [x.view(), y.view(), z.view()],
+            ));
+        }
         if let Some(smoke) = &solver.smoke {
             fields.push(GridField::scalar("smoke", smoke.density.view()));
             if let Some(t) = &smoke.temperature {
@@ -228,10 +242,70 @@ impl GridFrames {
     }
 }
 
+/// The vortex-particle writers of a grid scene with boundary layers: `vortices.pvd` with
+/// `vortices_NNNNNN.vtp`, and `vortices.h5`.
+pub struct VortexFrames(Writers<Hdf5Frames>);
+
+impl VortexFrames {
+    /// Writers into `out`, with `vortices.h5` when `hdf5`.
+    pub fn new(
+        out: &Path,
+        vtk: bool,
+        hdf5: bool,
+        attrs: &[(&str, AttrValue)],
+    ) -> Result<Self, IoError> {
+        let hdf5 = hdf5
+            .then(|| Hdf5Frames::create(&out.join("vortices.h5"), attrs))
+            .transpose()?;
+        Ok(Self(Writers {
+            out: out.to_path_buf(),
+            pvd: vtk.then(|| PvdSeries::new(&out.join("vortices.pvd"))),
+            hdf5,
+            count: 0,
+        }))
+    }
+
+    /// Position, vorticity vector (1/s), radius `sqrt(6) sigma` (m), kernel energy (m^5/s^2)
+    /// and age (s) of every particle.
+    pub fn write(&mut self, p: &VortexParticles, step: u64, time: Real) -> Result<(), IoError> {
+        let w = &mut self.0;
+        if !w.any() {
+            return Ok(());
+        }
+        let radius: Vec<Real> = (0..p.len()).map(|i| p.radius(i)).collect();
+        let energy: Vec<Real> = (0..p.len()).map(|i| p.energy(i)).collect();
+        let frame = ParticleFrame {
+            step,
+            time,
+            positions: &p.x,
+            fields: vec![
+                Field::vector("vorticity", &p.omega),
+                Field::scalar("radius", &radius),
+                Field::scalar("energy", &energy),
+                Field::scalar("age", &p.age),
+            ],
+        };
+        w.push(
+            &frame,
+            time,
+            ("vortices", "vtp"),
+            write_particles_vtk,
+            |h5, f| h5.append(f),
+        )
+    }
+}
+
 /// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
-    const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
+    const FIXED: [&str; 6] = [
+        "scene.toml",
+        "average.vti",
+        "particles.pvd",
+        "grid.pvd",
+        "vortices.pvd",
+        "vortices.h5",
+    ];
     let six_digits =
         |n: Option<&str>| n.is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()));
     let numbered = |s: &str, prefix: &str, ext: &str| {
@@ -248,6 +322,8 @@ pub fn is_run_output(name: &str) -> bool {
         || ["metrics.csv", "probes.csv", "frames.h5"].contains(&unprefixed)
         || numbered(name, "particles_", ".vtp")
         || numbered(name, "grid_", ".vti")
+        || numbered(name, "vortices_", ".vtp")
+        || numbered(name, "vortices_", ".h5")
         || numbered(unprefixed, "frames_", ".h5")
         || (name.starts_with("profile_") && name.ends_with(".csv"))
 }

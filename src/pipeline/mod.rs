@@ -14,6 +14,7 @@ mod frames;
 mod plan;
 mod simulation;
 mod stages;
+mod turbulence;
 
 use std::path::{Path, PathBuf};
 
@@ -24,7 +25,9 @@ pub use frames::{GridFrames, Kind, ParticleFrames};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
 pub use stages::{Stage, StepRecord};
+pub use turbulence::{GridTurbulence, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER};
 
+use crate::abl::AblError;
 use crate::geometry::GeometryError;
 use crate::grid::GridError;
 use crate::io::IoError;
@@ -43,6 +46,10 @@ pub enum RunError {
     Io(#[from] IoError),
     #[error(transparent)]
     Setup(Box<GridError>),
+    #[error(transparent)]
+    Abl(#[from] AblError),
+    #[error(transparent)]
+    Vortex(#[from] crate::vortex::VortexError),
     #[error("{cause}; the {frames} frames written so far are kept in {}", out.display())]
     Unstable {
         cause: Instability,

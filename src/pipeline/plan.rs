@@ -98,8 +98,15 @@ impl fmt::Display for Plan {
         writeln!(f, "each step, in order:")?;
         for (i, s) in self.stages.iter().enumerate() {
             writeln!(f, "{:>3}. {:<11} {}", i + 1, s.name, s.detail)?;
+            let width = s
+                .parts
+                .iter()
+                .map(|(p, _)| p.len())
+                .max()
+                .unwrap_or(0)
+                .max(11);
             for (part, detail) in &s.parts {
-                writeln!(f, "       - {part:<11} {detail}")?;
+                writeln!(f, "       - {part:<width$} {detail}")?;
             }
         }
         if !self.outputs.is_empty() {

@@ -1,8 +1,10 @@
 //! What a scene simulates: its solvers, stepped on one clock.
 
+use super::turbulence::Turbulence;
 use crate::grid::{GridError, GridSolver};
 use crate::io::IoError;
 use crate::sph::{Instability, SphSolver};
+use crate::vortex::VortexError;
 use crate::Real;
 
 /// Why a step could not be taken.
@@ -14,6 +16,8 @@ pub enum StepError {
     Grid(#[from] GridError),
     #[error(transparent)]
     Io(#[from] IoError),
+    #[error(transparent)]
+    Vortex(#[from] VortexError),
 }
 
 /// The solvers of a scene and the one clock they share. Each solver keeps its own copy of the
@@ -23,6 +27,8 @@ pub struct Simulation {
     pub sph: Option<SphSolver>,
     /// The MAC-grid fluid, when the scene has a `[grid]`.
     pub grid: Option<GridSolver>,
+    /// The grid's boundary-layer field and vortex particles, when an obstacle has a database.
+    pub turbulence: Option<Turbulence>,
     pub(super) time: Real,
     pub(super) steps: u64,
 }
@@ -33,6 +39,7 @@ impl Simulation {
         Self {
             sph,
             grid,
+            turbulence: None,
             time: 0.0,
             steps: 0,
         }

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::simulation::{Simulation, StepError};
+use super::turbulence::{TurbulenceStats, PARTS};
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
@@ -21,6 +22,7 @@ pub struct StepRecord {
     pub dt: Real,
     pub sph: Option<StepStats>,
     pub grid: Option<GridStepStats>,
+    pub turbulence: Option<TurbulenceStats>,
 }
 
 /// One stage of a step.
@@ -238,7 +240,19 @@ const GRID_METRICS: [&str; 10] = [
     "step_seconds",
 ];
 
-/// The grid row of each step: what the step did and the kinetic energy it ended with.
+/// Columns of the turbulence stage after the grid's, then one `*_seconds` per part.
+const TURBULENCE_METRICS: [&str; 7] = [
+    "vortex_particles",
+    "seeded",
+    "split",
+    "merged",
+    "dissipated",
+    "vortex_energy",
+    "abl_magnitude_sum",
+];
+
+/// The grid row of each step: what the step did and the kinetic energy it ended with, and what
+/// the turbulence stage did when the scene has one.
 pub struct GridMetrics {
     pub file: String,
     pub csv: Option<CsvSeries>,
@@ -249,20 +263,30 @@ impl Stage for GridMetrics {
         "metrics"
     }
 
-    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         (
             format!(
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
-                 change rate, stage times",
-                self.file
+                 change rate, stage times{}",
+                self.file,
+                if sim.turbulence.is_some() {
+                    "; vortex particles, seeded, split, merged, dissipated, vortex energy, ABL \
+                     magnitude sum, turbulence part times"
+                } else {
+                    ""
+                }
             ),
             Vec::new(),
         )
     }
 
-    fn open(&mut self, _sim: &Simulation, out: &Path) -> Result<(), IoError> {
+    fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
         columns.extend(GRID_METRICS.map(String::from));
+        if sim.turbulence.is_some() {
+            columns.extend(TURBULENCE_METRICS.map(String::from));
+            columns.extend(PARTS.map(|p| format!("{}_seconds", p.replace(' ', "_"))));
+        }
         self.csv = Some(CsvSeries::create(&out.join(&self.file), &columns)?);
         Ok(())
     }
@@ -272,7 +296,7 @@ impl Stage for GridMetrics {
             return Ok(());
         };
         let energy = sim.grid().kinetic_energy();
-        csv.row(&[
+        let mut row = vec![
             rec.step as Real,
             rec.time,
             s.dt,
@@ -286,7 +310,13 @@ impl Stage for GridMetrics {
             s.advect_seconds,
             s.project_seconds,
             s.total_seconds,
-        ])?;
+        ];
+        if let Some(t) = rec.turbulence {
+            row.extend([t.particles, t.seeded, t.split, t.merged, t.dissipated].map(|n| n as Real));
+            row.extend([t.energy, t.abl_sum]);
+            row.extend(t.seconds);
+        }
+        csv.row(&row)?;
         Ok(())
     }
 }

@@ -2,6 +2,7 @@
 //! the bodies and the refinement never read a scene.
 
 use super::Scene;
+use crate::abl::AblSettings;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
 use crate::grid::GridParams;
@@ -71,5 +72,24 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
         },
         smoke: grid.smoke.clone(),
         average_from: grid.average_from,
+    })
+}
+
+/// The run-time boundary layer's settings, when an obstacle names a database: the
+/// `[turbulence]` table (or its defaults), |U_0| resolved, the seed, and each database with its
+/// body. `None` also when |U_0| cannot be resolved, which validation refuses.
+pub fn abl_settings(scene: &Scene) -> Option<AblSettings> {
+    let databases: Vec<_> = scene
+        .abl_obstacles()
+        .filter_map(|(i, b)| Some((i, b.abl.as_ref()?.database.clone())))
+        .collect();
+    if databases.is_empty() {
+        return None;
+    }
+    Some(AblSettings {
+        params: scene.turbulence.clone().unwrap_or_default(),
+        u0: scene.turbulence_u0()?,
+        seed: scene.seed,
+        databases,
     })
 }

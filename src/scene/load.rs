@@ -52,7 +52,7 @@ pub fn parse_str(text: &str, origin: &Path, overrides: &[String]) -> Result<Scen
         deserialize(&rendered, origin, false)?
     };
     check_array_lengths(&table, &scene, origin)?;
-    resolve_mesh_paths(&mut scene, origin);
+    resolve_paths(&mut scene, origin);
     scene.validate(origin)?;
     Ok(scene)
 }
@@ -320,13 +320,20 @@ fn search<'t, 'i>(
     }
 }
 
-/// Makes relative mesh paths absolute against the scene file's folder, so the run does not
-/// depend on the working directory.
-fn resolve_mesh_paths(scene: &mut Scene, origin: &Path) {
+/// Makes relative mesh and database paths absolute against the scene file's folder, so the run
+/// does not depend on the working directory.
+fn resolve_paths(scene: &mut Scene, origin: &Path) {
     let base = base_dir(origin);
     let bodies = scene.container.iter_mut().chain(scene.obstacles.iter_mut());
-    for Body { shape, .. } in bodies {
-        if let Shape::Mesh { path, .. } = shape {
+    for Body { shape, abl, .. } in bodies {
+        let mesh = match shape {
+            Shape::Mesh { path, .. } => Some(path),
+            _ => None,
+        };
+        for path in mesh
+            .into_iter()
+            .chain(abl.as_mut().map(|a| &mut a.database))
+        {
             if path.is_relative() {
                 *path = base.join(&*path);
             }

@@ -7,6 +7,7 @@ pub mod grid;
 pub mod load;
 pub mod overrides;
 pub mod schema;
+pub mod turbulence;
 pub mod validate;
 
 pub use crate::refine::Refinement;

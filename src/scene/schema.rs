@@ -7,7 +7,8 @@
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-pub use crate::geometry::{Body, Keyframe, Motion, Shape};
+pub use crate::abl::{Seeding, TurbulenceParams};
+pub use crate::geometry::{AblLink, Body, Keyframe, Motion, Shape};
 pub use crate::metrics::{Axis, Metric, Probe};
 pub use crate::sph::{FluidBlock, Pressure, PressureSolverKind, Viscosity};
 use crate::stepping::StepLimits;
@@ -47,6 +48,10 @@ pub struct Scene {
     /// Viscosity.
     #[serde(default)]
     pub viscosity: Viscosity,
+    /// Run-time parameters of the artificial boundary layers (obstacles with `abl`); the
+    /// defaults of Pfaff et al. 2009 when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turbulence: Option<crate::abl::TurbulenceParams>,
     /// The SPH turbulence refinement (`none` when left out).
     #[serde(default)]
     pub refinement: crate::refine::Refinement,

@@ -85,6 +85,7 @@ impl Scene {
         }
         self.validate_solvers(&c)?;
         self.validate_grid(&c)?;
+        self.validate_turbulence(&c)?;
         self.refinement
             .validate()
             .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;

@@ -225,8 +225,9 @@ fn axis_or_x(w: &Vec3) -> Vec3 {
     }
 }
 
-/// A direction drawn uniformly on the sphere.
-fn random_unit(rng: &mut ChaCha8Rng) -> Vec3 {
+/// A direction drawn uniformly on the sphere: z uniform in [-1, 1] (Archimedes) and a uniform
+/// azimuth.
+pub fn random_unit(rng: &mut ChaCha8Rng) -> Vec3 {
     let z: Real = 2.0 * rng.random::<Real>() - 1.0;
     let phi = std::f64::consts::TAU * rng.random::<Real>();
     let s = (1.0 - z * z).max(0.0).sqrt();

@@ -10,3 +10,66 @@ pub fn hdf5_or_child() -> MutexGuard<'static, ()> {
     static LOCK: Mutex<()> = Mutex::new(());
     LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
+
+/// A complete boundary-layer database for a sphere of `radius` at the origin, written to `path`:
+/// `points` Fibonacci points on its surface, and at each Pfaff et al. 2009's Eq. 1 with an
+/// analytic slip velocity, `omega_pre = gain (U_s x n)`, where U_s is the tangential part of
+/// the stream `-d` past the sphere (translation along d) or of `-(d x x)` (rotation about d).
+/// `gain` is in 1/m.
+#[allow(dead_code)]
+pub fn sphere_database(path: &std::path::Path, radius: f64, points: usize, gain: f64) {
+    use eddy::abl::{
+        geometry_fingerprint, AblData, AblHeader, DirectionTable, MotionKind, Sampling,
+    };
+    use eddy::{Point3, Vec3};
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let normals: Vec<Vec3> = (0..points)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / points as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * i as f64;
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect();
+    let xs: Vec<Point3> = normals.iter().map(|n| Point3::from(n * radius)).collect();
+    let sampling = Sampling::new(5, 8).expect("valid sampling");
+    let table = |kind: MotionKind| {
+        let mut t = DirectionTable::empty(sampling, points);
+        for (i, j) in sampling.distinct() {
+            let d = sampling.direction(i, j);
+            let values: Vec<Vec3> = xs
+                .iter()
+                .zip(&normals)
+                .map(|(x, n)| {
+                    let u = match kind {
+                        MotionKind::Translation => -d,
+                        MotionKind::Rotation => -d.cross(&x.coords),
+                    };
+                    let slip = u - n * u.dot(n);
+                    slip.cross(n) * gain
+                })
+                .collect();
+            t.set(i, j, &values);
+        }
+        t
+    };
+    let shape = eddy::scene::Shape::Sphere { radius };
+    let (translation, rotation) = (table(MotionKind::Translation), table(MotionKind::Rotation));
+    AblData {
+        header: AblHeader {
+            obstacle: "sphere".into(),
+            fingerprint: "0".repeat(64),
+            geometry_fingerprint: geometry_fingerprint(&shape).expect("analytic shape"),
+            beta: gain,
+            layer_thickness: 0.05,
+            spacing: radius / 8.0,
+            settings: "synthetic = true\n".into(),
+        },
+        points: xs,
+        normals,
+        translation,
+        rotation,
+    }
+    .write(path)
+    .expect("writes the database");
+}

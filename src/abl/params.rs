@@ -1,0 +1,105 @@
+//! The run-time parameters of the artificial boundary layer, as a scene's `[turbulence]` table
+//! writes them, with the defaults of Pfaff et al. 2009 (section 4, Table 1). The scene checks
+//! their ranges; lengths the paper gives in cells of the simulation grid are in cells here.
+//!
+//! ```toml
+//! [turbulence]
+//! c_p = 2.0            # Eq. 8 seeding constant, 1/s (paper: about 1-4)
+//! u0 = 1.0             # |U_0| of Eq. 8, m/s (default: the inflow speed, else the obstacle's)
+//! gain = 1.0           # scales the database's omega_pre (Table 1's beta)
+//! r_max = 6.0          # largest seeded particle radius, cells
+//! seeding = "abl"      # or "random": the baseline of Figure 8, middle
+//! ```
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use crate::Real;
+
+/// Where vortex particles are seeded.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Seeding {
+    /// From the artificial boundary layer by Eq. 8 (Figure 9, lines 11–20).
+    #[default]
+    Abl,
+    /// The same particles (count, radius, strength) at uniformly random places along the
+    /// walls with random axes: the baseline of Figure 8 (middle).
+    Random,
+}
+
+/// The `[turbulence]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TurbulenceParams {
+    /// c_p of Eq. 8, 1/s: `p_T = 2 c_p dt (l_m |omega_ABL| / |U_0|)^2` is a probability per
+    /// sample and step while `dt` carries seconds, so c_p carries 1/s (PAPER-NOTES.md). 0 seeds
+    /// nothing.
+    #[serde(default = "d_c_p")]
+    pub c_p: Real,
+    /// |U_0| of Eq. 8, m/s. Default: the fastest inflow side's speed, else the fastest
+    /// obstacle's; a scene with neither must set it.
+    #[serde(default)]
+    pub u0: Option<Real>,
+    /// Factor on the database's omega_pre (Table 1's beta, applied at run time).
+    #[serde(default = "d_one")]
+    pub gain: Real,
+    /// Largest radius `sqrt(6) sigma` of a seeded particle, in cells (section 4.3: 6).
+    #[serde(default = "d_r_max")]
+    pub r_max: Real,
+    /// Particles with a smaller radius are dissipated, in cells (section 4.2: 2).
+    #[serde(default = "d_dissipation")]
+    pub dissipation_radius: Real,
+    /// Particles with a radius at most this (cells) are in the inertial subrange and split;
+    /// larger ones merge (section 4.2, energy transfer).
+    #[serde(default = "d_split")]
+    pub split_radius: Real,
+    /// Children per split, n (section 4.2: 2).
+    #[serde(default = "d_children")]
+    pub children: usize,
+    /// C of the cascade time scale `dt = C (kappa_a^(-2/3) - kappa_b^(-2/3))`, s / m^(2/3).
+    #[serde(default = "d_one")]
+    pub cascade_time: Real,
+    /// `abl` or `random`.
+    #[serde(default)]
+    pub seeding: Seeding,
+}
+
+fn d_c_p() -> Real {
+    2.0
+}
+fn d_one() -> Real {
+    1.0
+}
+fn d_r_max() -> Real {
+    6.0
+}
+fn d_dissipation() -> Real {
+    2.0
+}
+fn d_split() -> Real {
+    3.0
+}
+fn d_children() -> usize {
+    2
+}
+
+impl Default for TurbulenceParams {
+    fn default() -> Self {
+        toml::from_str("").expect("every turbulence key has a default")
+    }
+}
+
+/// Everything the run-time boundary layer needs from a scene, resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AblSettings {
+    pub params: TurbulenceParams,
+    /// |U_0|, m/s, resolved from the scene when `params.u0` is left out.
+    pub u0: Real,
+    /// The scene's seed.
+    pub seed: u64,
+    /// Each obstacle with a database: its index among the scene's bodies (container first) and
+    /// the database's absolute path.
+    pub databases: Vec<(usize, PathBuf)>,
+}

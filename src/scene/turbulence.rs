@@ -1,0 +1,169 @@
+//! The artificial-boundary-layer part of a scene: obstacles with `abl = { database = ... }` and
+//! the `[turbulence]` table, their checks, and the velocity scale |U_0| of Eq. 8.
+
+use super::validate::{Checker, Interval};
+use super::{Body, GridSide, Scene, SceneError};
+use crate::abl::TurbulenceParams;
+use crate::geometry::RigidBody;
+use crate::Real;
+
+/// Most children per split: beyond it a cascade step makes particles faster than any scene
+/// can use.
+const MAX_CHILDREN: usize = 8;
+
+impl Scene {
+    /// The obstacles with a database, with their index among the bodies (container first).
+    pub fn abl_obstacles(&self) -> impl Iterator<Item = (usize, &Body)> {
+        let first = usize::from(self.container.is_some());
+        self.obstacles
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.abl.is_some())
+            .map(move |(i, b)| (first + i, b))
+    }
+
+    /// |U_0| of Eq. 8: `turbulence.u0`, else the fastest inflow side, else the fastest surface
+    /// point of an obstacle with a database (linear speed plus angular speed times its
+    /// reach); `None` when all of these are zero.
+    pub fn turbulence_u0(&self) -> Option<Real> {
+        if let Some(u0) = self.turbulence.as_ref().and_then(|t| t.u0) {
+            return Some(u0);
+        }
+        let inflow = self.grid.iter().flat_map(|g| g.boundary.sides()).flatten();
+        let inflow = inflow
+            .filter_map(|side| match side {
+                GridSide::Inflow(v) => Some(norm(v)),
+                _ => None,
+            })
+            .fold(0.0, Real::max);
+        if inflow > 0.0 {
+            return Some(inflow);
+        }
+        let obstacle = self
+            .abl_obstacles()
+            .map(|(i, b)| obstacle_speed(b, i))
+            .fold(0.0, Real::max);
+        (obstacle > 0.0).then_some(obstacle)
+    }
+
+    pub(super) fn validate_turbulence(&self, c: &Checker) -> Result<(), SceneError> {
+        if let Some(b) = self.container.as_ref().filter(|b| b.abl.is_some()) {
+            let name = b.name.as_deref().unwrap_or("container");
+            return Err(c.invalid(
+                "container.abl",
+                name,
+                "no `abl` on the container: boundary layers belong to obstacles",
+            ));
+        }
+        let with_abl = self.abl_obstacles().count();
+        if with_abl > 0 && self.grid.is_none() {
+            let (i, _) = self
+                .obstacles
+                .iter()
+                .enumerate()
+                .find(|(_, b)| b.abl.is_some())
+                .expect("counted above");
+            return Err(c.invalid(
+                format!("obstacles[{i}].abl"),
+                "a scene without [grid]",
+                "a [grid]: boundary-layer seeding on SPH particles is not built yet",
+            ));
+        }
+        for (i, b) in self.obstacles.iter().enumerate() {
+            let Some(abl) = &b.abl else { continue };
+            if !abl.database.is_file() {
+                return Err(c.invalid(
+                    format!("obstacles[{i}].abl.database"),
+                    abl.database.display(),
+                    "an existing database file (eddy-precompute OBSTACLE.toml --out FILE \
+                     writes one)",
+                ));
+            }
+        }
+        if let Some(t) = &self.turbulence {
+            if with_abl == 0 {
+                return Err(c.invalid(
+                    "turbulence",
+                    "a table",
+                    "an obstacle with `abl = { database = \"...\" }` for it to act on",
+                ));
+            }
+            check_params(c, t)?;
+        }
+        if with_abl > 0 && self.turbulence_u0().is_none() {
+            return Err(c.invalid(
+                "turbulence.u0",
+                "nothing",
+                "a speed in m/s: the scene has no inflow and its obstacles with a database do \
+                 not move, so Eq. 8 has no velocity scale",
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn check_params(c: &Checker, t: &TurbulenceParams) -> Result<(), SceneError> {
+    c.num("turbulence.c_p", t.c_p, Interval::ge(0.0).note("1/s"))?;
+    if let Some(u0) = t.u0 {
+        c.num("turbulence.u0", u0, Interval::gt(0.0).note("m/s"))?;
+    }
+    c.num("turbulence.gain", t.gain, Interval::ge(0.0))?;
+    c.num(
+        "turbulence.dissipation_radius",
+        t.dissipation_radius,
+        Interval::ge(0.0).note("cells"),
+    )?;
+    c.num(
+        "turbulence.r_max",
+        t.r_max,
+        Interval::ge(t.dissipation_radius.max(0.5))
+            .note("cells, at least the dissipation radius (smaller particles would vanish)"),
+    )?;
+    c.num(
+        "turbulence.split_radius",
+        t.split_radius,
+        Interval::ge(0.0).note("cells"),
+    )?;
+    c.num(
+        "turbulence.cascade_time",
+        t.cascade_time,
+        Interval::ge(0.0).note("s/m^(2/3)"),
+    )?;
+    if !(2..=MAX_CHILDREN).contains(&t.children) {
+        return Err(c.invalid(
+            "turbulence.children",
+            t.children,
+            format!("2 to {MAX_CHILDREN}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The fastest surface speed of `body`: keyframed paths by their fastest segment.
+fn obstacle_speed(body: &Body, index: usize) -> Real {
+    let m = &body.motion;
+    if !m.keyframes.is_empty() {
+        return m
+            .keyframes
+            .windows(2)
+            .map(|k| {
+                let d: [Real; 3] = std::array::from_fn(|a| k[1].position[a] - k[0].position[a]);
+                norm(d) / (k[1].t - k[0].t)
+            })
+            .fold(0.0, Real::max);
+    }
+    let spin = norm(m.angular);
+    let reach = if spin > 0.0 {
+        RigidBody::from_scene(body, index).map_or(0.0, |r| {
+            let (lo, hi) = r.local_aabb();
+            lo.coords.abs().sup(&hi.coords.abs()).norm()
+        })
+    } else {
+        0.0
+    };
+    norm(m.linear) + spin * reach
+}
+
+fn norm(v: [Real; 3]) -> Real {
+    v.iter().map(|x| x * x).sum::<Real>().sqrt()
+}

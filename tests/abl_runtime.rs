@@ -1,0 +1,384 @@
+//! The grid's artificial-boundary-layer runtime (Pfaff et al. 2009, Figure 9) as pipeline
+//! stages: without seeding it is the plain grid bit for bit; the wall-attached layer is the
+//! database's lookup for the stream; omega_ABL rides the flow; the plan is what runs; outputs;
+//! and clear errors for bad databases and bad `[turbulence]` values.
+
+mod common;
+
+use std::path::Path;
+
+use eddy::abl::AblDatabase;
+use eddy::grid::walls::{boundary_cells, wall_distance};
+use eddy::pipeline::{run, Pipeline, RunOptions};
+use eddy::scene::{parse_str, Scene, Shape};
+use eddy::{Point3, Real, Vec3};
+
+/// Radius of the test sphere, m.
+const RADIUS: Real = 0.25;
+/// The stream, m/s.
+const U: Real = 1.0;
+
+/// A 32 x 16 x 16 grid over 3 x 1.5 x 1.5 m with a 1 m/s inflow, open outflow and slip sides,
+/// the sphere at `at`; `abl` and `extra` are appended as written.
+fn text(at: [Real; 3], abl: &str, extra: &str) -> String {
+    format!(
+        r#"
+name = "abl_test"
+gravity = [0.0, 0.0, 0.0]
+seed = 7
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [3.0, 1.5, 1.5]
+[time]
+steps = 8
+cfl = 0.8
+dt_max = 0.05
+[grid]
+resolution = [32, 16, 16]
+advection = "maccormack"
+initial_velocity = [{U}, 0.0, 0.0]
+[grid.boundary]
+x_min = {{ inflow = [{U}, 0.0, 0.0] }}
+x_max = "open"
+y_min = "slip"
+y_max = "slip"
+z_min = "slip"
+z_max = "slip"
+[grid.smoke]
+buoyancy = 0.0
+[[grid.smoke.sources]]
+shape = {{ type = "box", half_extents = [0.1, 0.3, 0.3] }}
+position = [0.2, 0.75, 0.75]
+[output]
+vtk = false
+[[obstacles]]
+name = "ball"
+shape = {{ type = "sphere", radius = {RADIUS} }}
+position = [{}, {}, {}]
+{abl}
+{extra}
+"#,
+        at[0], at[1], at[2]
+    )
+}
+
+const CENTRE: [Real; 3] = [0.9, 0.75, 0.75];
+
+fn database(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("ball.h5");
+    let _serial = common::hdf5_or_child();
+    common::sphere_database(&path, RADIUS, 400, 4.0);
+    path
+}
+
+fn abl_line(db: &Path) -> String {
+    format!("abl = {{ database = {:?} }}", db.display().to_string())
+}
+
+fn scene(text: &str) -> Result<Scene, String> {
+    parse_str(text, Path::new("abl_test.toml"), &[]).map_err(|e| e.to_string())
+}
+
+fn built(text: &str) -> Pipeline {
+    let scene = scene(text).expect("the scene loads");
+    let _serial = common::hdf5_or_child();
+    Pipeline::build(&scene).expect("the pipeline builds")
+}
+
+/// With c_p = 0 nothing is seeded, so the turbulence stages leave the flow alone: velocity and
+/// smoke equal the plain scene's bit for bit. With seeding they do not (so the comparison can
+/// fail).
+#[test]
+fn without_seeding_the_run_is_the_plain_grid_bit_for_bit() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let mut plain = built(&text(CENTRE, "", ""));
+    let mut quiet = built(&text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 0.0"));
+    let mut seeded = built(&text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 1e4"));
+    for _ in 0..8 {
+        plain.step(None, None).expect("steps");
+        quiet.step(None, None).expect("steps");
+        seeded.step(None, None).expect("steps");
+    }
+    let (a, b, c) = (
+        plain.sim.grid.as_ref().unwrap(),
+        quiet.sim.grid.as_ref().unwrap(),
+        seeded.sim.grid.as_ref().unwrap(),
+    );
+    for axis in 0..3 {
+        assert!(a.mac.u[axis] == b.mac.u[axis], "velocity {axis} differs");
+    }
+    assert!(a.smoke.as_ref().unwrap().density == b.smoke.as_ref().unwrap().density);
+    let t = seeded.sim.turbulence.as_ref().unwrap();
+    assert!(!t.vortices.is_empty(), "c_p = 1e4 seeded nothing");
+    assert!(
+        a.mac.u[1] != c.mac.u[1],
+        "the seeded particles changed nothing"
+    );
+    assert!(quiet.sim.turbulence.as_ref().unwrap().vortices.is_empty());
+}
+
+/// A fixed sphere in a uniform stream: after the first step (of 1 us, so advection moves the
+/// field by 1e-5 cells) every wall-attached cell holds the database's value for the stream
+/// (the sphere moving at -U through still air) at the boundary point nearest to it.
+#[test]
+fn the_wall_layer_is_the_lookup_for_the_stream() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db_path = database(dir.path());
+    let scene_text = text(CENTRE, &abl_line(&db_path), "[turbulence]\nc_p = 0.0")
+        .replace("cfl = 0.8", "cfl = 0.8\ndt = 1e-6");
+    let mut p = built(&scene_text);
+    p.step(None, None).expect("steps");
+    let grid = p.sim.grid.as_ref().unwrap();
+    let abl = &p.sim.turbulence.as_ref().unwrap().abl;
+    let db = {
+        let _serial = common::hdf5_or_child();
+        AblDatabase::open(&db_path, Some(&Shape::Sphere { radius: RADIUS })).expect("opens")
+    };
+    let pose = grid.bodies[0].pose(0.0);
+    let expected = db.lookup_world(&pose, &Vec3::new(-U, 0.0, 0.0), &Vec3::zeros());
+    let cells = boundary_cells(grid, 0);
+    assert!(cells.len() > 50, "{} wall cells", cells.len());
+    let peak = expected.iter().map(|w| w.norm()).fold(0.0, Real::max);
+    let mut worst: Real = 0.0;
+    for c in &cells {
+        let x = Point3::from(grid.mac.cell_center(*c)) - Vec3::from(CENTRE);
+        let nearest = (0..db.len())
+            .min_by(|&i, &j| {
+                let di = (db.points()[i] - x).norm();
+                let dj = (db.points()[j] - x).norm();
+                di.total_cmp(&dj)
+            })
+            .unwrap();
+        let got = Vec3::new(abl[0][*c], abl[1][*c], abl[2][*c]);
+        worst = worst.max((got - expected[nearest]).norm() / peak);
+    }
+    assert!(
+        worst < 1e-3,
+        "wall layer differs from the lookup by {worst} of its peak"
+    );
+}
+
+/// omega_ABL is carried by the flow (Figure 9, line 9): a blob released away from the sphere
+/// in the 1 m/s stream moves by U t, within a fraction of a cell.
+#[test]
+fn an_abl_blob_moves_with_the_stream() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    // The sphere low in a corner, the blob high across from it; no seeding, no wall layer.
+    let mut p = built(&text(
+        [0.4, 0.35, 0.35],
+        &abl_line(&db),
+        "[turbulence]\nc_p = 0.0\ngain = 0.0",
+    ));
+    let dx = p.sim.grid.as_ref().unwrap().mac.dx;
+    let start = Vec3::new(1.0, 1.0, 1.0);
+    let centroid = |p: &Pipeline| {
+        let grid = p.sim.grid.as_ref().unwrap();
+        let w = &p.sim.turbulence.as_ref().unwrap().abl[2];
+        let (mut sum, mut weighted) = (0.0, Vec3::zeros());
+        for (idx, &v) in w.indexed_iter() {
+            let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
+            sum += v;
+            weighted += x * v;
+        }
+        weighted / sum
+    };
+    {
+        let grid = p.sim.grid.as_ref().unwrap();
+        let w = &mut p.sim.turbulence.as_mut().unwrap().abl[2];
+        for (idx, v) in w.indexed_iter_mut() {
+            let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
+            *v = (-(x - start).norm_squared() / (2.0 * (2.0 * dx).powi(2))).exp();
+        }
+    }
+    let c0 = centroid(&p);
+    let mut t = 0.0;
+    while t < 0.5 - 1e-12 {
+        t += p.step(Some(0.5), None).expect("steps").dt;
+    }
+    let moved = centroid(&p) - c0;
+    let error = (moved - Vec3::new(U * t, 0.0, 0.0)).norm();
+    assert!(
+        error < 0.25 * dx,
+        "moved {moved:?} in {t} s, off U t by {} cells",
+        error / dx
+    );
+}
+
+/// The mixing length of Eq. 8 is the distance to the nearest wall: the sphere's surface and
+/// the domain's wall sides (slip sides included; inflow and open sides are not walls).
+#[test]
+fn the_mixing_length_is_the_distance_to_the_nearest_wall() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let p = built(&text(CENTRE, &abl_line(&db), ""));
+    let grid = p.sim.grid.as_ref().unwrap();
+    let d = wall_distance(grid);
+    let c = Vec3::from(CENTRE);
+    for (idx, &got) in d.indexed_iter() {
+        let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
+        // Slip sides are walls (y and z); the inflow and open sides (x) are not.
+        let sides = [x.y, 1.5 - x.y, x.z, 1.5 - x.z];
+        let want = sides
+            .into_iter()
+            .fold((x - c).norm() - RADIUS, Real::min)
+            .max(0.0);
+        assert!((got - want).abs() < 1e-9, "at {x:?}: {got} against {want}");
+    }
+}
+
+/// Bad databases and bad `[turbulence]` values are refused with the key, the value and what is
+/// allowed; a database of another obstacle names both geometry fingerprints.
+#[test]
+fn bad_databases_and_turbulence_values_are_refused_clearly() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let abl = abl_line(&db);
+    let refused = |text: &str, needles: &[&str]| {
+        let e = scene(text).expect_err("refused");
+        for n in needles {
+            assert!(e.contains(n), "{e:?} does not name {n:?}");
+        }
+    };
+    let missing = abl_line(&dir.path().join("none.h5"));
+    refused(
+        &text(CENTRE, &missing, ""),
+        &["obstacles[0].abl.database", "none.h5", "eddy-precompute"],
+    );
+    for (extra, key) in [
+        ("c_p = -1.0", "turbulence.c_p"),
+        ("c_p = nan", "turbulence.c_p"),
+        ("u0 = 0.0", "turbulence.u0"),
+        ("gain = -2.0", "turbulence.gain"),
+        ("r_max = 1.0", "turbulence.r_max"),
+        ("dissipation_radius = -1.0", "turbulence.dissipation_radius"),
+        ("children = 1", "turbulence.children"),
+        ("children = 100", "turbulence.children"),
+        ("cascade_time = -1.0", "turbulence.cascade_time"),
+    ] {
+        refused(
+            &text(CENTRE, &abl, &format!("[turbulence]\n{extra}")),
+            &[key],
+        );
+    }
+    refused(
+        &text(CENTRE, &abl, "[turbulence]\nseeding = \"everywhere\""),
+        &["seeding"],
+    );
+    // A table with nothing to act on.
+    refused(
+        &text(CENTRE, "", "[turbulence]\nc_p = 1.0"),
+        &["turbulence"],
+    );
+    // No velocity scale: no inflow, and the sphere does not move.
+    let still = text(CENTRE, &abl, "")
+        .replace("x_min = { inflow = [1, 0.0, 0.0] }", "")
+        .replace(&format!("x_min = {{ inflow = [{U}, 0.0, 0.0] }}"), "");
+    refused(&still, &["turbulence.u0", "velocity scale"]);
+    // With u0 given it loads.
+    scene(&format!("{still}\n[turbulence]\nu0 = 2.0")).expect("u0 set");
+
+    // A database precomputed for another sphere: refused when the pipeline opens it.
+    let other = text(CENTRE, &abl, "").replace(&format!("radius = {RADIUS}"), "radius = 0.3");
+    let scene = scene(&other).expect("loads: the file exists");
+    let e = {
+        let _serial = common::hdf5_or_child();
+        Pipeline::build(&scene).err().expect("refused").to_string()
+    };
+    let fp = |r: Real| eddy::abl::geometry_fingerprint(&Shape::Sphere { radius: r }).unwrap();
+    for needle in [fp(RADIUS), fp(0.3)] {
+        assert!(e.contains(&needle), "{e} does not name {needle}");
+    }
+}
+
+/// `abl` belongs to obstacles of grid scenes.
+#[test]
+fn abl_is_refused_on_the_container_and_without_a_grid() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let sph = format!(
+        r#"
+name = "sph"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [1.0, 1.0, 1.0]
+[time]
+steps = 1
+[fluid]
+spacing = 0.05
+blocks = [{{ min = [0.1, 0.1, 0.1], max = [0.5, 0.5, 0.5] }}]
+[[obstacles]]
+shape = {{ type = "sphere", radius = {RADIUS} }}
+position = [0.7, 0.7, 0.7]
+{}
+"#,
+        abl_line(&db)
+    );
+    let e = scene(&sph).expect_err("refused");
+    assert!(
+        e.contains("obstacles[0].abl") && e.contains("[grid]"),
+        "{e}"
+    );
+    let container = sph
+        .replace("[[obstacles]]", "[container]")
+        .replace("position = [0.7, 0.7, 0.7]", "position = [0.5, 0.5, 0.5]");
+    let e = scene(&container).expect_err("refused");
+    assert!(e.contains("container.abl"), "{e}");
+}
+
+/// The plan lists the turbulence stage and its parts before the grid's step, every step runs
+/// exactly them, and the run writes the vortex particles, the ABL field and the turbulence
+/// metrics. A scene without `abl` builds no turbulence stage.
+#[test]
+fn the_plan_is_what_runs_and_the_outputs_are_written() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let file = dir.path().join("abl.toml");
+    let body = text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 1e4")
+        .replace("vtk = false", "vtk = true\nhdf5 = true\ninterval = 0.05");
+    std::fs::write(&file, body).expect("writes the scene");
+    let out = dir.path().join("out");
+    let options = RunOptions {
+        out: Some(out.clone()),
+        trace: true,
+        progress: false,
+        ..RunOptions::default()
+    };
+    let summary = {
+        let _serial = common::hdf5_or_child();
+        run(&file, &options).expect("runs")
+    };
+    let names: Vec<&str> = summary.plan.stages.iter().map(|s| s.name).collect();
+    let at = |n: &str| names.iter().position(|s| *s == n).expect(n);
+    assert!(at("turbulence") + 1 == at("grid"), "{names:?}");
+    let per_step = summary.plan.step_trace();
+    for (k, step) in summary.trace.chunks(per_step.len()).enumerate() {
+        assert_eq!(step, per_step.as_slice(), "step {k}");
+    }
+    for f in [
+        "vortices.pvd",
+        "vortices_000000.vtp",
+        "vortices.h5",
+        "grid_000000.vti",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let vti = std::fs::read_to_string(out.join("grid_000001.vti")).expect("frame");
+    assert!(vti.contains("abl_vorticity"));
+    let metrics = std::fs::read_to_string(out.join("metrics.csv")).expect("metrics");
+    let header = metrics.lines().next().unwrap();
+    for column in [
+        "vortex_particles",
+        "seeded",
+        "vortex_energy",
+        "abl_magnitude_sum",
+        "seeding_seconds",
+        "synthesis_seconds",
+    ] {
+        assert!(header.split(',').any(|c| c == column), "{column} missing");
+    }
+    let plain = built(&text(CENTRE, "", ""));
+    assert!(plain.stages.iter().all(|s| s.name() != "turbulence"));
+    assert!(plain.sim.turbulence.is_none());
+}

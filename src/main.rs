@@ -46,6 +46,9 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
     BenchGrid(cli::bench::GridBenchArgs),
+    /// Run time against error of the artificial boundary layers (Pfaff et al. Figure 8): the
+    /// backward-facing step with ABL seeding, random seeding and none, against a finer plain run.
+    BenchAbl(cli::bench::AblBenchArgs),
     /// Plot energy and vorticity against time for several runs into one PNG.
     Compare {
         /// Run output folders (each with a metrics.csv).
@@ -141,6 +144,10 @@ fn run(command: Command) -> anyhow::Result<()> {
         }
         Command::Bench(args) => eddy::bench::run(&args.into())?,
         Command::BenchGrid(args) => eddy::bench::grid::run(&args.into())?,
+        Command::BenchAbl(args) => {
+            let rows = eddy::bench::abl::run(&args.scene.clone(), &args.into())?;
+            print!("{}", eddy::bench::abl::table(&rows));
+        }
         Command::Compare { runs, out } => {
             let series = runs
                 .iter()

@@ -2,6 +2,7 @@
 //! dam break ([`sph`]), the refinements' overheads against plain DFSPH ([`refine`]), and the
 //! MAC grid's plume step times and Taylor–Green error against run time ([`grid`]).
 
+pub mod abl;
 pub mod grid;
 pub mod refine;
 pub mod sph;

@@ -1,6 +1,9 @@
 //! The command-line options of `eddy bench` and `eddy bench-grid`, turned into the library's
 //! benchmark options.
 
+use std::path::PathBuf;
+
+use eddy::bench::abl::AblBenchOptions;
 use eddy::bench::grid::GridBenchOptions;
 use eddy::bench::BenchOptions;
 
@@ -71,6 +74,46 @@ impl From<GridBenchArgs> for GridBenchOptions {
             warmup: a.warmup,
             steps: a.steps,
             taylor_green: a.taylor_green,
+        }
+    }
+}
+
+/// Options of `eddy bench-abl`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct AblBenchArgs {
+    /// The backward-facing step scene (with a database for its step).
+    #[arg(default_value = "scenes/abl_backward_step.toml")]
+    pub scene: PathBuf,
+    /// Resolution factor of the plain reference run.
+    #[arg(long, default_value_t = 4)]
+    pub scale: usize,
+    /// Stations behind the step, m along x.
+    #[arg(long, value_delimiter = ',', default_value = "1.25,1.5,2.0,2.5,3.0")]
+    pub stations: Vec<f64>,
+    /// Override a scene key in every run, e.g. --set time.end=6 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Leave out the reference run (no errors are then computed).
+    #[arg(long)]
+    pub skip_reference: bool,
+    /// Compare with the reference profiles of an earlier run (its `reference.csv` in
+    /// `--profiles`) instead of running the reference again.
+    #[arg(long, value_name = "CSV")]
+    pub reference: Option<PathBuf>,
+    /// Write each run's profiles (station, y, U, k) into this folder as LABEL.csv.
+    #[arg(long, value_name = "DIR")]
+    pub profiles: Option<PathBuf>,
+}
+
+impl From<AblBenchArgs> for AblBenchOptions {
+    fn from(a: AblBenchArgs) -> Self {
+        AblBenchOptions {
+            scale: a.scale,
+            stations: a.stations,
+            overrides: a.set,
+            skip_reference: a.skip_reference,
+            reference: a.reference,
+            profiles: a.profiles,
         }
     }
 }

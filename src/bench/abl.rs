@@ -1,0 +1,360 @@
+//! `eddy bench-abl`: run time against error for the artificial boundary layers, the protocol of
+//! Pfaff et al. 2009, Figure 8. The backward-facing step at its coarse resolution with
+//! boundary-layer seeding (`abl`), with the same particles seeded at random along the walls
+//! (`random`), and with no turbulence (`none`), against the plain run at `scale` times the
+//! resolution (`reference`).
+//!
+//! **Measure.** At stations behind the step, each run accumulates over time (from the scene's
+//! `grid.average_from`) and over the periodic span the mean and mean square of every velocity
+//! component per cell of its own grid; the time-averaged velocity `U` and turbulent kinetic
+//! energy `k = 1/2 sum (<u_i^2> - <u_i>^2)` of each cell are then averaged over the cells of
+//! every coarse bin (one coarse cell in x and y), so a fine run's small-scale fluctuation
+//! counts as fluctuation, not as mean shear. The errors are root-mean-square differences from
+//! the reference over the stations' bins: `U` in units of |U_0|, `k` in units of |U_0|^2.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use ndarray::Array2;
+
+use crate::io::{CsvSeries, IoError};
+use crate::pipeline::{Pipeline, RunError};
+use crate::scene::{self, Scene};
+use crate::Real;
+
+/// What `eddy bench-abl` measures.
+#[derive(Debug, Clone)]
+pub struct AblBenchOptions {
+    /// Resolution factor of the reference run.
+    pub scale: usize,
+    /// Stations behind the step, m along x.
+    pub stations: Vec<Real>,
+    /// Overrides applied to every run (`--set`).
+    pub overrides: Vec<String>,
+    /// Skip the reference (its profiles are then compared with nothing).
+    pub skip_reference: bool,
+    /// Read the reference's profiles from this CSV (written by an earlier run into
+    /// `profiles`) instead of running it: calibration sweeps then cost only the coarse runs.
+    pub reference: Option<PathBuf>,
+    /// Write each run's profiles into this folder as `LABEL.csv` (station, y, U, k).
+    pub profiles: Option<PathBuf>,
+}
+
+/// One run of the table.
+#[derive(Debug, Clone)]
+pub struct AblBenchRow {
+    pub label: &'static str,
+    pub cells: usize,
+    pub steps: u64,
+    pub seconds: f64,
+    /// Vortex particles at the end.
+    pub particles: usize,
+    /// Mean of k over the bins (the mean of U is fixed by the flux through the section).
+    pub mean_k: Real,
+    /// Errors against the reference (NaN for the reference itself or without one).
+    pub u_error: Real,
+    pub k_error: Real,
+}
+
+/// Per station, per coarse y bin: the time-averaged streamwise velocity U and k.
+type Profiles = Vec<Vec<(Real, Real)>>;
+
+/// Time-and-span statistics of the velocity at the stations: per station, per (x, y) cell of
+/// the run's grid, sums of u_i dt and u_i^2 dt over the span, and the time they cover.
+struct Stations {
+    /// Per station: the first x index and the cells' sums `[u, v, w, uu, vv, ww]`, indexed
+    /// [x offset, y].
+    planes: Vec<(usize, Array2<[Real; 6]>)>,
+    time: Real,
+    /// Cells per span (z) summed into each entry.
+    span: usize,
+}
+
+impl Stations {
+    /// The cells of `pipeline`'s grid inside the coarse bin column around each station, whose
+    /// coarse cell size is `coarse` (m).
+    fn new(p: &Pipeline, stations: &[Real], coarse: Real) -> Self {
+        let mac = &p.sim.grid.as_ref().expect("a grid scene").mac;
+        let per_bin = (coarse / mac.dx).round().max(1.0) as usize;
+        let planes = stations
+            .iter()
+            .map(|&x| {
+                let bin = ((x - mac.origin.x) / coarse).floor().max(0.0);
+                let first = (bin as usize * per_bin).min(mac.dims[0] - per_bin);
+                (first, Array2::from_elem((per_bin, mac.dims[1]), [0.0; 6]))
+            })
+            .collect();
+        Self {
+            planes,
+            time: 0.0,
+            span: mac.dims[2],
+        }
+    }
+
+    fn add(&mut self, p: &Pipeline, dt: Real) {
+        let mac = &p.sim.grid.as_ref().expect("a grid scene").mac;
+        for (first, sums) in &mut self.planes {
+            for ((i, j), s) in sums.indexed_iter_mut() {
+                for k in 0..mac.dims[2] {
+                    let u = mac.velocity_at_sample(None, [*first + i, j, k]);
+                    for c in 0..3 {
+                        s[c] += u[c] * dt;
+                        s[3 + c] += u[c] * u[c] * dt;
+                    }
+                }
+            }
+        }
+        self.time += dt;
+    }
+
+    /// Per station, per coarse y bin: (U, k) averaged over the run's cells in the bin.
+    fn profiles(&self, coarse_rows: usize) -> Profiles {
+        let n = self.time * self.span as Real;
+        self.planes
+            .iter()
+            .map(|(_, sums)| {
+                let rows = sums.dim().1;
+                let per = rows / coarse_rows;
+                (0..coarse_rows)
+                    .map(|b| {
+                        let cells = sums.slice(ndarray::s![.., b * per..(b + 1) * per]);
+                        let count = cells.len() as Real;
+                        let (mut u, mut k) = (0.0, 0.0);
+                        for s in cells {
+                            let mean: [Real; 3] = std::array::from_fn(|c| s[c] / n);
+                            u += mean[0];
+                            k += 0.5
+                                * (0..3)
+                                    .map(|c| s[3 + c] / n - mean[c] * mean[c])
+                                    .sum::<Real>();
+                        }
+                        (u / count, k / count)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// Runs one configuration to the scene's end, timing the steps; returns the row (without
+/// errors) and its profiles.
+fn measure(
+    label: &'static str,
+    scene: &Scene,
+    stations: &[Real],
+    coarse: (Real, usize),
+) -> Result<(AblBenchRow, Profiles), RunError> {
+    let mut p = Pipeline::build(scene)?;
+    let grid = scene.grid.as_ref().expect("the step scene has a grid");
+    let from = grid.average_from.unwrap_or(0.0);
+    let end = scene.time.end.expect("the step scene has an end time");
+    let mut stats = Stations::new(&p, stations, coarse.0);
+    let bar = ProgressBar::new(1000).with_message(label);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{msg:>9} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let started = Instant::now();
+    let mut steps = 0;
+    while p.sim.time() < end - 1e-12 {
+        let rec = p
+            .step(Some(end), None)
+            .map_err(|e| RunError::Unsupported(format!("bench-abl: {label} run failed: {e}")))?;
+        steps += 1;
+        bar.set_position((1000.0 * p.sim.time() / end) as u64);
+        if rec.time + rec.dt > from {
+            stats.add(&p, rec.dt.min(rec.time + rec.dt - from));
+        }
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let profiles = stats.profiles(coarse.1);
+    let bins: Vec<(Real, Real)> = profiles.iter().flatten().copied().collect();
+    let mean_k = bins.iter().map(|b| b.1).sum::<Real>() / bins.len() as Real;
+    Ok((
+        AblBenchRow {
+            label,
+            cells: grid.resolution.iter().product(),
+            steps,
+            seconds,
+            particles: p.sim.turbulence.as_ref().map_or(0, |t| t.vortices.len()),
+            mean_k,
+            u_error: Real::NAN,
+            k_error: Real::NAN,
+        },
+        profiles,
+    ))
+}
+
+/// The scene without any boundary layer (the plain grid: no ABL stages are built).
+fn plain(mut scene: Scene) -> Scene {
+    scene.obstacles.iter_mut().for_each(|b| b.abl = None);
+    scene.turbulence = None;
+    scene
+}
+
+/// Runs the four configurations of `path` (the backward-facing step) and returns the table
+/// rows: none, random, abl, then the reference.
+pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, RunError> {
+    let load = |extra: &[String]| -> Result<Scene, RunError> {
+        let mut all = options.overrides.clone();
+        all.extend_from_slice(extra);
+        Ok(scene::load(path, &all)?)
+    };
+    let base = load(&[])?;
+    let grid = base
+        .grid
+        .as_ref()
+        .ok_or_else(|| RunError::Unsupported(format!("{} has no [grid]", path.display())))?;
+    let n = grid.resolution;
+    let coarse = (grid.spacing(&base), n[1]);
+    let s = options.scale;
+    let configs: Vec<(&'static str, Scene)> = [
+        ("none", Ok(plain(base.clone()))),
+        ("random", load(&["turbulence.seeding=random".into()])),
+        ("abl", Ok(base.clone())),
+    ]
+    .into_iter()
+    .chain(
+        (!options.skip_reference && options.reference.is_none()).then(|| {
+            (
+                "reference",
+                load(&[format!(
+                    "grid.resolution=[{},{},{}]",
+                    n[0] * s,
+                    n[1] * s,
+                    n[2] * s
+                )])
+                .map(plain),
+            )
+        }),
+    )
+    .map(|(l, r)| r.map(|sc| (l, sc)))
+    .collect::<Result<_, _>>()?;
+    let mut rows = Vec::new();
+    let mut profiles = Vec::new();
+    for (label, scene) in &configs {
+        let (row, prof) = measure(label, scene, &options.stations, coarse)?;
+        rows.push(row);
+        profiles.push(prof);
+    }
+    if let Some(dir) = &options.profiles {
+        std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, "creating", e))?;
+        for (row, prof) in rows.iter().zip(&profiles) {
+            write_profiles(
+                &dir.join(format!("{}.csv", row.label)),
+                prof,
+                &options.stations,
+                coarse.0,
+            )?;
+        }
+    }
+    let reference = match &options.reference {
+        Some(path) => Some(read_profiles(path, options.stations.len(), coarse.1)?),
+        None if !options.skip_reference => profiles.last().cloned(),
+        None => None,
+    };
+    if let Some(reference) = reference {
+        let u0 = base.turbulence_u0().unwrap_or(1.0);
+        for (row, prof) in rows.iter_mut().zip(&profiles) {
+            let pairs: Vec<_> = prof
+                .iter()
+                .flatten()
+                .zip(reference.iter().flatten())
+                .collect();
+            let rms = |f: &dyn Fn(&(Real, Real)) -> Real| {
+                (pairs
+                    .iter()
+                    .map(|(a, b)| (f(a) - f(b)).powi(2))
+                    .sum::<Real>()
+                    / pairs.len() as Real)
+                    .sqrt()
+            };
+            row.u_error = rms(&|b| b.0) / u0;
+            row.k_error = rms(&|b| b.1) / (u0 * u0);
+        }
+    }
+    Ok(rows)
+}
+
+/// Writes `profiles` as CSV rows `station, y, U, k` (bin centres in y, m).
+fn write_profiles(
+    path: &Path,
+    profiles: &Profiles,
+    stations: &[Real],
+    bin: Real,
+) -> Result<(), IoError> {
+    let columns = ["station", "y", "U", "k"].map(String::from);
+    let mut csv = CsvSeries::create(path, &columns)?;
+    for (x, prof) in stations.iter().zip(profiles) {
+        for (b, (u, k)) in prof.iter().enumerate() {
+            csv.row(&[*x, (b as Real + 0.5) * bin, *u, *k])?;
+        }
+    }
+    Ok(())
+}
+
+/// Reads profiles written by [`write_profiles`], checking they have `stations` x `bins` rows.
+fn read_profiles(
+    path: &Path,
+    stations: usize,
+    bins: usize,
+) -> Result<Vec<Vec<(Real, Real)>>, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, "reading", e))?;
+    let rows: Vec<Vec<Real>> = text
+        .lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.trim().parse::<Real>())
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .collect::<Result<_, _>>()
+        .map_err(|e| IoError::invalid(path, format!("not a profile table: {e}")))?;
+    if rows.len() != stations * bins || rows.iter().any(|r| r.len() != 4) {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "{} rows; this comparison has {stations} stations x {bins} bins of 4 columns \
+                 (station, y, U, k)",
+                rows.len()
+            ),
+        ));
+    }
+    Ok(rows
+        .chunks(bins)
+        .map(|c| c.iter().map(|r| (r[2], r[3])).collect())
+        .collect())
+}
+
+/// The table as the README prints it.
+pub fn table(rows: &[AblBenchRow]) -> String {
+    let reference = rows
+        .iter()
+        .find(|r| r.label == "reference")
+        .map(|r| r.seconds);
+    let mut out = String::from(
+        "| run | cells | steps | wall s | / reference | vortex particles | mean k | U error | k error |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let share = reference.map_or("-".into(), |t| format!("1/{:.0}", t / r.seconds));
+        out.push_str(&format!(
+            "| {} | {} | {} | {:.1} | {} | {} | {:.5} | {:.4} | {:.5} |\n",
+            r.label,
+            r.cells,
+            r.steps,
+            r.seconds,
+            share,
+            r.particles,
+            r.mean_k,
+            r.u_error,
+            r.k_error
+        ));
+    }
+    out
+}

@@ -40,6 +40,8 @@ pub enum GridError {
          than the obstacle"
     )]
     NoFluid { body: String, domain: [Real; 3] },
+    #[error("static flow: {0}")]
+    StaticFlow(String),
     #[error("{what} solve failed at t = {time:.6} s (step {step}): {source}")]
     Solve {
         what: &'static str,
@@ -114,6 +116,9 @@ pub struct GridSolver {
     /// The velocity at the start of a step, for [`GridStepStats::change_rate`].
     before: [Array3<Real>; 3],
     params: GridParams,
+    /// The stored face velocities of the static flow-field mode (Pfaff et al. 2009, Figure 11),
+    /// restored at the end of every step; `None` for a solved flow.
+    frozen: Option<[Array3<Real>; 3]>,
     /// Against gravity (y without gravity): the direction smoke rises.
     up: Vec3,
     /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
@@ -169,6 +174,7 @@ impl GridSolver {
             up: up_of(params.gravity),
             ran: Vec::new(),
             params: params.clone(),
+            frozen: None,
             time: 0.0,
             step: 0,
         })
@@ -249,7 +255,16 @@ impl GridSolver {
             }
         }
         self.ran.push("advect");
-        if self.params.reflection {
+        if let Some(frozen) = &self.frozen {
+            // Figure 11: the stored flow, plus what the turbulence stage synthesised onto it
+            // this step, has carried the smoke; the velocity itself is not advanced.
+            if let Some(smoke) = self.smoke.as_mut() {
+                self.ran.push("forces");
+                apply_sources(smoke, &mut self.mac, &self.bounds);
+            }
+            self.mac.u.clone_from(frozen);
+            self.ran.push("static flow");
+        } else if self.params.reflection {
             self.reflected_update(dt, &mut stats)?;
         } else {
             advect_velocity_into(&self.mac, dt, scheme, &mut self.advected);
@@ -262,7 +277,9 @@ impl GridSolver {
             stats.pressure_residual = solve.relative_residual;
         }
         stats.advect_seconds = t0.elapsed().as_secs_f64() - stats.project_seconds;
-        self.ran.push("pressure");
+        if self.frozen.is_none() {
+            self.ran.push("pressure");
+        }
 
         self.time += dt;
         self.step += 1;
@@ -297,6 +314,54 @@ impl GridSolver {
         )
     }
 
+    /// Switches to the static flow-field mode (Pfaff et al. 2009, Figure 11): from now on the
+    /// velocity is `cells` (cell-centre components, as grid frames store them) and every step
+    /// only carries the smoke. The face values are the means of the cells beside each face,
+    /// made discretely divergence-free by one projection with this grid's obstacles and sides.
+    pub fn freeze_velocity(&mut self, cells: &[Array3<Real>; 3]) -> Result<(), GridError> {
+        let dims = self.mac.dims;
+        if let Some(bad) = cells.iter().find(|c| c.shape() != dims) {
+            return Err(GridError::StaticFlow(format!(
+                "the stored field has {:?} cells, this grid {dims:?}",
+                bad.shape()
+            )));
+        }
+        if self.bodies.iter().any(RigidBody::is_moving) {
+            return Err(GridError::StaticFlow(
+                "a stored flow cannot follow moving obstacles".into(),
+            ));
+        }
+        for (a, (u, c)) in self.mac.u.iter_mut().zip(cells).enumerate() {
+            Zip::indexed(u).par_for_each(|idx, f| {
+                let idx = [idx.0, idx.1, idx.2];
+                let beside = |i: usize| -> Option<Real> {
+                    (i < dims[a]).then(|| {
+                        let mut m = idx;
+                        m[a] = i;
+                        c[m]
+                    })
+                };
+                let lo = idx[a].checked_sub(1).and_then(beside);
+                *f = match (lo, beside(idx[a])) {
+                    (Some(l), Some(h)) => 0.5 * (l + h),
+                    (Some(v), None) | (None, Some(v)) => v,
+                    (None, None) => 0.0,
+                };
+            });
+        }
+        self.mac.sync_periodic();
+        self.bounds.apply(&mut self.mac);
+        let dt = self.stable_dt()?;
+        self.project(dt)?;
+        self.frozen = Some(self.mac.u.clone());
+        Ok(())
+    }
+
+    /// Whether the velocity is a stored flow (see [`Self::freeze_velocity`]).
+    pub fn is_static(&self) -> bool {
+        self.frozen.is_some()
+    }
+
     /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
     /// here), read from the same settings it branches on.
     pub fn describe(&self) -> Vec<(&'static str, String)> {
@@ -323,6 +388,23 @@ impl GridSolver {
         } else {
             ""
         };
+        if self.frozen.is_some() {
+            let smoke = self.smoke.as_ref().map_or(0, |s| s.sources.len());
+            out.push((
+                "advect",
+                format!("{scheme} advection of the smoke by the stored flow"),
+            ));
+            if self.smoke.is_some() {
+                out.push(("forces", format!("smoke sources ({smoke})")));
+            }
+            out.push((
+                "static flow",
+                "velocity restored to the stored field: no velocity advection, no projection"
+                    .into(),
+            ));
+            out.extend(self.describe_average());
+            return out;
+        }
         out.push((
             "advect",
             format!("{scheme} advection of velocity{scalars}{reflection}"),
@@ -360,10 +442,13 @@ impl GridSolver {
                 p.pressure.tolerance, p.pressure.max_iterations
             ),
         ));
-        if let Some(t) = p.average_from {
-            out.push(("average", format!("time-averaged velocity from t = {t} s")));
-        }
+        out.extend(self.describe_average());
         out
+    }
+
+    fn describe_average(&self) -> Option<(&'static str, String)> {
+        let t = self.params.average_from?;
+        Some(("average", format!("time-averaged velocity from t = {t} s")))
     }
 
     /// Forces, sources, boundary conditions and viscosity over `dt`, before a projection.
@@ -461,25 +546,7 @@ impl GridSolver {
             self.ran.push("forces");
         }
         if let Some(smoke) = self.smoke.as_mut() {
-            for src in &smoke.sources {
-                set_where(&mut smoke.density, &src.cells, src.density);
-                if let Some(t) = smoke.temperature.as_mut() {
-                    set_where(t, &src.cells, src.temperature);
-                }
-                if let Some((faces, v)) = &src.faces {
-                    for a in 0..3 {
-                        set_where(&mut self.mac.u[a], &faces[a], v[a]);
-                    }
-                }
-            }
-            let fluid = self.bounds.fluid_mask();
-            Zip::from(&mut smoke.density)
-                .and(&fluid)
-                .par_for_each(|s, &f| {
-                    if !f {
-                        *s = 0.0;
-                    }
-                });
+            apply_sources(smoke, &mut self.mac, &self.bounds);
             if smoke.buoyancy != 0.0 || smoke.heat_buoyancy != 0.0 {
                 let lift = buoyancy(
                     &smoke.density,
@@ -684,4 +751,27 @@ fn source_region(
         density: source.density,
         temperature: source.temperature,
     })
+}
+
+/// The smoke sources' density, temperature and face velocities, and no smoke inside obstacles.
+fn apply_sources(smoke: &mut SmokeState, mac: &mut MacGrid, bounds: &Boundaries) {
+    for src in &smoke.sources {
+        set_where(&mut smoke.density, &src.cells, src.density);
+        if let Some(t) = smoke.temperature.as_mut() {
+            set_where(t, &src.cells, src.temperature);
+        }
+        if let Some((faces, v)) = &src.faces {
+            for a in 0..3 {
+                set_where(&mut mac.u[a], &faces[a], v[a]);
+            }
+        }
+    }
+    let fluid = bounds.fluid_mask();
+    Zip::from(&mut smoke.density)
+        .and(&fluid)
+        .par_for_each(|s, &f| {
+            if !f {
+                *s = 0.0;
+            }
+        });
 }

@@ -163,3 +163,97 @@ fn write_fields(group: &Group, frame: &GridFrame) -> Result<(), Failure> {
     }
     Ok(())
 }
+
+/// A velocity field read back from a grid frames file: the grid it lies on and its cell-centre
+/// components.
+#[derive(Debug, Clone)]
+pub struct StoredVelocity {
+    pub origin: Vec3,
+    pub spacing: Real,
+    pub dims: [usize; 3],
+    /// The frame's index in the file, and its time, s.
+    pub frame: usize,
+    pub time: Real,
+    /// Cell-centre velocity, m/s, one array per component.
+    pub velocity: [ndarray::Array3<Real>; 3],
+}
+
+/// Reads the `velocity` of frame `frame` (the last when `None`) of the grid frames file
+/// `path` (an index written by [`Hdf5GridFrames`]). HDF5 holds a global lock: call from one
+/// thread.
+pub fn read_velocity(path: &Path, frame: Option<usize>) -> Result<StoredVelocity, IoError> {
+    let fail = |what: String| IoError::invalid(path, what);
+    let file = hdf5::File::open(path)
+        .map_err(|e| fail(format!("cannot open as HDF5 grid frames: {e}")))?;
+    let format = file
+        .attr("format")
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map_err(|_| fail("no root attribute `format`: not eddy grid frames".into()))?;
+    if format.as_str() != GRID_FORMAT {
+        return Err(fail(format!(
+            "root attribute `format` is {:?}, expected {GRID_FORMAT:?} (grid frames)",
+            format.as_str()
+        )));
+    }
+    let read = |name: &str| {
+        file.attr(name)
+            .and_then(|a| a.read_raw::<f64>())
+            .map_err(|e| fail(format!("root attribute `{name}`: {e}")))
+    };
+    let (origin, spacing) = (read("origin")?, read("spacing")?);
+    let dims = file
+        .attr("dims")
+        .and_then(|a| a.read_raw::<u64>())
+        .map_err(|e| fail(format!("root attribute `dims`: {e}")))?;
+    let (origin, dims) = match (origin.as_slice(), dims.as_slice(), spacing.as_slice()) {
+        (&[x, y, z], &[nx, ny, nz], &[_]) => (Vec3::new(x, y, z), [nx, ny, nz].map(|n| n as usize)),
+        _ => {
+            return Err(fail(
+                "root attributes origin, dims, spacing have wrong sizes".into(),
+            ))
+        }
+    };
+    let frames = file
+        .group("frames")
+        .and_then(|g| g.member_names())
+        .map_err(|e| fail(format!("no /frames group: {e}")))?;
+    let count = frames.len();
+    let k = match frame {
+        None if count > 0 => count - 1,
+        Some(k) if k < count => k,
+        _ => {
+            return Err(fail(format!(
+                "frame {} asked for, the file has {count} frame(s)",
+                frame.map_or("last".into(), |k| k.to_string())
+            )))
+        }
+    };
+    let group = file
+        .group(&format!("frames/{k:06}"))
+        .map_err(|e| fail(format!("frame {k}: {e}")))?;
+    let time = group
+        .attr("time")
+        .and_then(|a| a.read_scalar::<f64>())
+        .map_err(|e| fail(format!("frame {k}: attribute `time`: {e}")))?;
+    let data = group
+        .dataset("velocity")
+        .and_then(|d| d.read::<f64, ndarray::Ix4>())
+        .map_err(|e| fail(format!("frame {k}: dataset `velocity`: {e}")))?;
+    if data.shape() != [dims[0], dims[1], dims[2], 3] {
+        return Err(fail(format!(
+            "frame {k}: velocity has shape {:?}, the file's grid is {dims:?} x 3",
+            data.shape()
+        )));
+    }
+    if data.iter().any(|v| !v.is_finite()) {
+        return Err(fail(format!("frame {k}: velocity holds non-finite values")));
+    }
+    Ok(StoredVelocity {
+        origin,
+        spacing: spacing[0],
+        dims,
+        frame: k,
+        time,
+        velocity: std::array::from_fn(|c| data.index_axis(ndarray::Axis(3), c).to_owned()),
+    })
+}

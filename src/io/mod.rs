@@ -24,7 +24,9 @@ pub use error::IoError;
 pub use frame::{Field, FieldData, ParticleFrame};
 pub use grid_frame::{GridField, GridFieldData, GridFrame};
 pub use hdf5_frames::{AttrValue, Hdf5Frames};
-pub use hdf5_grid::{Hdf5GridFrames, GRID_FORMAT, GRID_FORMAT_VERSION};
+pub use hdf5_grid::{
+    read_velocity, Hdf5GridFrames, StoredVelocity, GRID_FORMAT, GRID_FORMAT_VERSION,
+};
 pub use pvd::PvdSeries;
 pub use vti::write_grid_vtk;
 pub use vtk::write_particles_vtk;

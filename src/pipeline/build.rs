@@ -13,7 +13,8 @@ use super::stages::{
 use super::turbulence::GridTurbulence;
 use super::RunError;
 use crate::geometry::RigidBody;
-use crate::grid::GridSolver;
+use crate::grid::{GridError, GridSolver};
+use crate::io::read_velocity;
 use crate::io::{AttrValue, IoError};
 use crate::metrics::Probe;
 use crate::refine;
@@ -132,7 +133,31 @@ fn sph_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<SphSolver, RunErro
 fn grid_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<GridSolver, RunError> {
     let params = build::grid_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name)))?;
-    GridSolver::new(&params, bodies).map_err(|e| RunError::Setup(Box::new(e)))
+    let mut solver = GridSolver::new(&params, bodies).map_err(|e| RunError::Setup(Box::new(e)))?;
+    if let Some(path) = scene.grid.as_ref().and_then(|g| g.static_flow.as_ref()) {
+        let frame = scene.grid.as_ref().and_then(|g| g.static_flow_frame);
+        let stored = read_velocity(path, frame)?;
+        let mismatch = stored.dims != params.resolution
+            || (stored.spacing - params.dx).abs() > 1e-9 * params.dx
+            || (stored.origin - params.origin).norm() > 1e-9 * params.dx;
+        if mismatch {
+            return Err(RunError::Setup(Box::new(GridError::StaticFlow(format!(
+                "{} holds a grid of {:?} cells of {} m at {:?}; this scene's is {:?} cells of {} \
+                 m at {:?}",
+                path.display(),
+                stored.dims,
+                stored.spacing,
+                stored.origin.as_slice(),
+                params.resolution,
+                params.dx,
+                params.origin.as_slice()
+            )))));
+        }
+        solver
+            .freeze_velocity(&stored.velocity)
+            .map_err(|e| RunError::Setup(Box::new(e)))?;
+    }
+    Ok(solver)
 }
 
 impl Pipeline {

@@ -62,6 +62,15 @@ pub struct Grid {
     /// Start of the time-averaged velocity, s; no average is kept when left out.
     #[serde(default)]
     pub average_from: Option<Real>,
+    /// Static flow-field mode (Pfaff et al. 2009, Figure 11): the velocity of a stored grid
+    /// frames file (`RUN/frames.h5` of an earlier run on the same grid, relative to the scene)
+    /// instead of a solved flow; only the smoke, the boundary layer and the vortex particles
+    /// move. Off when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub static_flow: Option<std::path::PathBuf>,
+    /// The frame of `static_flow` (counting from 0); the last when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub static_flow_frame: Option<usize>,
     /// Stop once the relative velocity change per unit time, |u^{n+1} - u^n| / (|u^n| dt),
     /// falls below this (steady state); runs to the end when left out.
     #[serde(default)]
@@ -128,6 +137,33 @@ impl Scene {
         let Some(grid) = &self.grid else {
             return Ok(());
         };
+        if grid.static_flow_frame.is_some() && grid.static_flow.is_none() {
+            return Err(c.invalid(
+                "grid.static_flow_frame",
+                grid.static_flow_frame.unwrap_or_default(),
+                "only with grid.static_flow",
+            ));
+        }
+        if let Some(path) = &grid.static_flow {
+            if !path.is_file() {
+                return Err(c.invalid(
+                    "grid.static_flow",
+                    path.display(),
+                    "an existing grid frames file (frames.h5 of a run with output.hdf5 = true)",
+                ));
+            }
+            let all = self.container.iter().chain(&self.obstacles);
+            if let Some(b) = all.into_iter().find(|b| b.motion != Default::default()) {
+                return Err(c.invalid(
+                    "grid.static_flow",
+                    path.display(),
+                    format!(
+                        "only with static obstacles: '{}' moves, and a stored flow cannot follow it",
+                        b.name.as_deref().unwrap_or("an obstacle")
+                    ),
+                ));
+            }
+        }
         let n = grid.resolution;
         for (axis, &cells) in n.iter().enumerate() {
             if cells == 0 {

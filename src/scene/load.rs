@@ -320,10 +320,15 @@ fn search<'t, 'i>(
     }
 }
 
-/// Makes relative mesh and database paths absolute against the scene file's folder, so the run
-/// does not depend on the working directory.
+/// Makes relative mesh, database and stored-flow paths absolute against the scene file's
+/// folder, so the run does not depend on the working directory.
 fn resolve_paths(scene: &mut Scene, origin: &Path) {
     let base = base_dir(origin);
+    if let Some(path) = scene.grid.as_mut().and_then(|g| g.static_flow.as_mut()) {
+        if path.is_relative() {
+            *path = base.join(&*path);
+        }
+    }
     let bodies = scene.container.iter_mut().chain(scene.obstacles.iter_mut());
     for Body { shape, abl, .. } in bodies {
         let mesh = match shape {

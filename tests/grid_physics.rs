@@ -267,7 +267,10 @@ fn bad_grid_input_is_reported() {
             ..Default::default()
         },
     );
-    assert!(matches!(run, Err(RunError::Grid { .. })));
+    match run {
+        Err(RunError::Setup(e)) => assert!(e.to_string().contains("boulder"), "{e}"),
+        other => panic!("expected a set-up error, got {:?}", other.err()),
+    }
 }
 
 /// Reads column `col` of a CSV written by eddy.

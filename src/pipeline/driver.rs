@@ -51,10 +51,9 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
     write_atomic(&out.join("scene.toml"), |w| {
         w.write_all(resolved.as_bytes())
     })?;
-    let mut p = Pipeline::build(scene).map_err(|e| match e {
-        RunError::Setup(cause) => stopped(StepError::Grid(*cause), 0, &out),
-        e => e,
-    })?;
+    // A scene that cannot be built (no fluid cell, a stored flow on another grid) has written
+    // no frame: its error says what is wrong and nothing about frames.
+    let mut p = Pipeline::build(scene)?;
     p.open(&out)?;
     let end = End {
         time: scene.time.end,

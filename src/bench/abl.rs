@@ -148,7 +148,9 @@ fn measure(
     let mut p = Pipeline::build(scene)?;
     let grid = scene.grid.as_ref().expect("the step scene has a grid");
     let from = grid.average_from.unwrap_or(0.0);
-    let end = scene.time.end.expect("the step scene has an end time");
+    let end = scene.time.end.ok_or_else(|| {
+        RunError::Unsupported("bench-abl: the scene needs a time.end to average up to".into())
+    })?;
     let mut stats = Stations::new(&p, stations, coarse.0);
     let bar = ProgressBar::new(1000).with_message(label);
     bar.set_style(

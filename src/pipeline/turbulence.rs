@@ -28,9 +28,10 @@ use rand_chacha::ChaCha8Rng;
 
 use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
+use super::RunError;
 use crate::abl::seeding::{scatter, seed, SeedSamples, SeedingParams};
-use crate::abl::{AblDatabase, AblError, AblSettings, Seeding, WallLayer};
-use crate::grid::advect::advect;
+use crate::abl::{AblDatabase, AblSettings, Seeding, WallLayer};
+use crate::grid::advect::advect_into;
 use crate::grid::walls::{boundary_cells, mean_velocity, shell_cells, wall_distance};
 use crate::grid::{Advection, GridSolver};
 use crate::vortex::{synthesize, Dynamics, DynamicsSettings, VortexParticles};
@@ -126,6 +127,8 @@ pub struct GridTurbulence {
     scheme: Advection,
     /// Wall distance per cell, kept while no body moves.
     distance: Option<Array3<Real>>,
+    /// The advected omega_ABL component, swapped with the field's (no allocation per step).
+    advected: Array3<Real>,
     moving: bool,
 }
 
@@ -137,7 +140,7 @@ impl GridTurbulence {
         sim: &mut Simulation,
         shapes: &[crate::geometry::Shape],
         scheme: Advection,
-    ) -> Result<Self, AblError> {
+    ) -> Result<Self, RunError> {
         let grid = sim.grid.as_ref().expect("turbulence is built for a grid");
         let dx = grid.mac.dx;
         let mut obstacles = Vec::new();
@@ -164,8 +167,7 @@ impl GridTurbulence {
                 ..Default::default()
             },
             settings.seed,
-        )
-        .expect("the scene checked the turbulence ranges");
+        )?;
         let moving = grid.bodies.iter().any(|b| b.is_moving());
         sim.turbulence = Some(Turbulence {
             abl: std::array::from_fn(|_| Array3::zeros(grid.mac.dims)),
@@ -178,6 +180,7 @@ impl GridTurbulence {
             dynamics,
             scheme,
             distance: None,
+            advected: Array3::zeros(grid.mac.dims),
             moving,
         })
     }
@@ -341,7 +344,15 @@ impl Stage for GridTurbulence {
         lap(0, &mut stats);
         let stagger = grid.mac.cell_stagger();
         for a in 0..3 {
-            state.abl[a] = advect(&state.abl[a], stagger, &grid.mac, dt, self.scheme);
+            advect_into(
+                &state.abl[a],
+                stagger,
+                &grid.mac,
+                dt,
+                self.scheme,
+                &mut self.advected,
+            );
+            std::mem::swap(&mut state.abl[a], &mut self.advected);
         }
         flush(&mut state.abl, grid);
         lap(1, &mut stats);
@@ -358,12 +369,11 @@ impl Stage for GridTurbulence {
         lap(4, &mut stats);
         stats.particles = state.vortices.len();
         stats.energy = state.vortices.total_energy();
-        stats.abl_sum = (0..state.abl[0].len())
-            .map(|i| {
-                let c = |a: usize| state.abl[a].as_slice().expect("standard layout")[i];
-                (c(0) * c(0) + c(1) * c(1) + c(2) * c(2)).sqrt()
-            })
-            .sum();
+        let [x, y, z] = &state.abl;
+        stats.abl_sum = ndarray::Zip::from(x)
+            .and(y)
+            .and(z)
+            .fold(0.0, |s, &a, &b, &c| s + (a * a + b * b + c * c).sqrt());
         rec.turbulence = Some(stats);
         Ok(())
     }

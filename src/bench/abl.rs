@@ -18,6 +18,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use ndarray::Array2;
 
+use crate::io::plot::{error_figure, CurvePanel, ErrorPoint};
 use crate::io::{CsvSeries, IoError};
 use crate::pipeline::{Pipeline, RunError};
 use crate::scene::{self, Scene};
@@ -39,6 +40,9 @@ pub struct AblBenchOptions {
     pub reference: Option<PathBuf>,
     /// Write each run's profiles into this folder as `LABEL.csv` (station, y, U, k).
     pub profiles: Option<PathBuf>,
+    /// Draw the U and k errors against wall time and the U profiles at the middle station into
+    /// this PNG.
+    pub plot: Option<PathBuf>,
 }
 
 /// One run of the table.
@@ -259,7 +263,7 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         None if !options.skip_reference => profiles.last().cloned(),
         None => None,
     };
-    if let Some(reference) = reference {
+    if let Some(reference) = &reference {
         let u0 = base.turbulence_u0().unwrap_or(1.0);
         for (row, prof) in rows.iter_mut().zip(&profiles) {
             let pairs: Vec<_> = prof
@@ -278,6 +282,49 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
             row.u_error = rms(&|b| b.0) / u0;
             row.k_error = rms(&|b| b.1) / (u0 * u0);
         }
+    }
+    if let Some(png) = &options.plot {
+        let points: Vec<ErrorPoint> = rows
+            .iter()
+            .map(|r| ErrorPoint {
+                label: r.label.into(),
+                seconds: r.seconds,
+                errors: vec![r.u_error, r.k_error],
+            })
+            .collect();
+        let middle = options.stations.len() / 2;
+        let profile = |label: &str, prof: &Profiles| {
+            let curve = prof[middle]
+                .iter()
+                .enumerate()
+                .map(|(b, &(u, _))| ((b as Real + 0.5) * coarse.0, u))
+                .collect();
+            (label.to_owned(), curve)
+        };
+        let mut curves: Vec<_> = rows
+            .iter()
+            .zip(&profiles)
+            .map(|(r, p)| profile(r.label, p))
+            .collect();
+        if options.reference.is_some() {
+            if let Some(r) = &reference {
+                curves.push(profile("reference", r));
+            }
+        }
+        let title = format!(
+            "time-averaged U at x = {} m against y (m)",
+            options.stations[middle]
+        );
+        error_figure(
+            png,
+            &["U error against wall time", "k error against wall time"],
+            &points,
+            CurvePanel {
+                title: &title,
+                x_label: "y (m)",
+                curves: &curves,
+            },
+        )?;
     }
     Ok(rows)
 }

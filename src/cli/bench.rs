@@ -103,6 +103,9 @@ pub struct AblBenchArgs {
     /// Write each run's profiles (station, y, U, k) into this folder as LABEL.csv.
     #[arg(long, value_name = "DIR")]
     pub profiles: Option<PathBuf>,
+    /// Draw the errors against wall time and the middle station's U profiles into this PNG.
+    #[arg(long, value_name = "PNG")]
+    pub plot: Option<PathBuf>,
 }
 
 impl From<AblBenchArgs> for AblBenchOptions {
@@ -114,6 +117,7 @@ impl From<AblBenchArgs> for AblBenchOptions {
             skip_reference: a.skip_reference,
             reference: a.reference,
             profiles: a.profiles,
+            plot: a.plot,
         }
     }
 }

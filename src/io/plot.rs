@@ -116,12 +116,6 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
     if runs.is_empty() {
         return Err(IoError::invalid(out, "no runs to compare"));
     }
-    register_bundled_font();
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "plot.png".into());
-    let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
     let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
     let panels: Vec<_> = PANELS
         .iter()
@@ -132,10 +126,8 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
     } else {
         panels
     };
-    let skipped = {
-        let height = 400 * panels.len() as u32;
-        let root = BitMapBackend::new(&tmp, (1200, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let height = 400 * panels.len() as u32;
+    with_png(out, (1200, height), |root| {
         let areas = root.split_evenly((panels.len(), 1));
         let mut skipped = 0;
         for (area, &&(title, columns)) in areas.iter().zip(&panels) {
@@ -199,9 +191,166 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
                 .draw()
                 .map_err(|e| fail(&e))?;
         }
+        Ok(skipped)
+    })
+}
+
+type Canvas<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// Draws into a white PNG of `size` pixels with the bundled font, under a temporary name
+/// renamed to `out` when complete, so `out` is never half drawn.
+fn with_png<T>(
+    out: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Canvas<'_>) -> Result<T, IoError>,
+) -> Result<T, IoError> {
+    register_bundled_font();
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "plot.png".into());
+    let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
+    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    let result = {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let result = draw(&root)?;
         root.present().map_err(|e| fail(&e))?;
-        skipped
+        result
     };
     std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))?;
-    Ok(skipped)
+    Ok(result)
+}
+
+/// One run of a run-time-against-error study: its label, wall seconds and errors (one per
+/// panel; NaN where it has none, e.g. the reference itself).
+#[derive(Debug, Clone)]
+pub struct ErrorPoint {
+    pub label: String,
+    pub seconds: f64,
+    pub errors: Vec<Real>,
+}
+
+/// A panel of curves, one per run: its title, the x axis's label, and per run a label and
+/// (x, value) points.
+#[derive(Debug, Clone, Copy)]
+pub struct CurvePanel<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub curves: &'a [(String, Vec<(Real, Real)>)],
+}
+
+/// Error against wall time, log-log, one panel per error (titled by `panels`), one marker per
+/// run; then `profile` drawn as lines. Into the PNG `out`, written under a temporary name and
+/// renamed.
+pub fn error_figure(
+    out: &Path,
+    panels: &[&str],
+    points: &[ErrorPoint],
+    profile: CurvePanel<'_>,
+) -> Result<(), IoError> {
+    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    let rows = panels.len() + 1;
+    with_png(out, (1200, 400 * rows as u32), |root| {
+        let areas = root.split_evenly((rows, 1));
+        for (p, (area, title)) in areas.iter().zip(panels).enumerate() {
+            let shown: Vec<(usize, f64, Real)> = points
+                .iter()
+                .enumerate()
+                .filter(|(_, q)| q.seconds > 0.0 && q.errors[p] > 0.0 && q.errors[p].is_finite())
+                .map(|(k, q)| (k, q.seconds, q.errors[p]))
+                .collect();
+            if shown.is_empty() {
+                area.titled(&format!("{title}: no data"), ("sans-serif", 20))
+                    .map_err(|e| fail(&e))?;
+                continue;
+            }
+            let span = |f: fn(&(usize, f64, Real)) -> f64| {
+                let (lo, hi) = shown
+                    .iter()
+                    .map(f)
+                    .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+                (lo / 2.0)..(hi * 2.0)
+            };
+            let mut chart = ChartBuilder::on(area)
+                .caption(*title, ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(80)
+                .build_cartesian_2d(span(|q| q.1).log_scale(), span(|q| q.2).log_scale())
+                .map_err(|e| fail(&e))?;
+            chart
+                .configure_mesh()
+                .x_desc("wall time (s)")
+                .x_label_formatter(&|v| format!("{v:.3}"))
+                .y_label_formatter(&|v| format!("{v:.3e}"))
+                .label_style(("sans-serif", 14))
+                .draw()
+                .map_err(|e| fail(&e))?;
+            for (k, t, e) in shown {
+                let color = Palette99::pick(k).to_rgba();
+                chart
+                    .draw_series(std::iter::once(Circle::new((t, e), 6, color.filled())))
+                    .map_err(|e| fail(&e))?
+                    .label(points[k].label.clone())
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .label_font(("sans-serif", 14))
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| fail(&e))?;
+        }
+        let CurvePanel {
+            title,
+            x_label,
+            curves,
+        } = profile;
+        let all = || curves.iter().flat_map(|(_, c)| c.iter());
+        let (x0, x1) = all().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+        let (y0, y1) = all().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let area = &areas[rows - 1];
+        if !(x1 > x0 && y1 >= y0) {
+            area.titled(&format!("{title}: no data"), ("sans-serif", 20))
+                .map_err(|e| fail(&e))?;
+            return Ok(());
+        }
+        let pad = 0.05 * (y1 - y0).max(1e-12);
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+            .map_err(|e| fail(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        for (k, (label, curve)) in curves.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    curve.iter().copied(),
+                    color.stroke_width(2),
+                ))
+                .map_err(|e| fail(&e))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font(("sans-serif", 14))
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| fail(&e))?;
+        Ok(())
+    })
 }

@@ -240,6 +240,12 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     )
     .map(|(l, r)| r.map(|sc| (l, sc)))
     .collect::<Result<_, _>>()?;
+    // A stored reference is read first: a bad file fails before the runs.
+    let stored = options
+        .reference
+        .as_ref()
+        .map(|path| read_profiles(path, options.stations.len(), coarse.1))
+        .transpose()?;
     let mut rows = Vec::new();
     let mut profiles = Vec::new();
     for (label, scene) in &configs {
@@ -258,8 +264,8 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
             )?;
         }
     }
-    let reference = match &options.reference {
-        Some(path) => Some(read_profiles(path, options.stations.len(), coarse.1)?),
+    let reference = match stored {
+        Some(r) => Some(r),
         None if !options.skip_reference => profiles.last().cloned(),
         None => None,
     };

@@ -185,6 +185,22 @@ fn bad_files_and_arguments_fail_with_a_message() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("expected three finite numbers"), "{err}");
+    // Finite speeds whose looked-up values are not.
+    let out = eddy(&[
+        "lookup",
+        db.to_str().expect("utf-8 path"),
+        "--velocity=1e308,1e308,1e308",
+        "--csv",
+        csv.to_str().expect("utf-8 path"),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "{err} {}",
+        std::fs::read_to_string(&csv).unwrap_or_default()
+    );
+    assert!(err.contains("overflow"), "{err}");
+    assert!(!csv.exists(), "no CSV from an overflowing lookup");
 }
 
 /// `--csv -` writes the same CSV to standard output, and a vector may start with a minus sign

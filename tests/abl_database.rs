@@ -455,6 +455,75 @@ fn wrong_obstacle_missing_direction_truncated_and_foreign_files_are_refused() {
     assert!(msg.contains("/rotation/dataset omega has shape"), "{msg}");
 }
 
+/// A speed whose square overflows keeps its direction: the lookup at |v| = 1.7e200 is the
+/// unit lookup times |v|, not zero.
+#[test]
+fn huge_speeds_keep_their_direction() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let db = AblDatabase::open(&written(tmp.path(), &synthetic(sampling())), None).expect("opens");
+    let unit = db.lookup(&Vec3::new(1.0, 1.0, 1.0), &Vec3::zeros());
+    let huge = db.lookup(&Vec3::new(1e200, 1e200, 1e200), &Vec3::zeros());
+    for (u, h) in unit.iter().zip(&huge) {
+        assert!(
+            (h / 1e200 - u).norm() <= 1e-12 * u.norm().max(1.0),
+            "{h:?} against {u:?}"
+        );
+    }
+    assert!(huge.iter().any(|h| h.norm() > 1e199));
+}
+
+/// Content a lookup cannot use is refused when the file is opened, naming what is wrong: a
+/// NaN in a computed row, a zero normal, azimuth angles in another order, directions that
+/// disagree with their angles. Writing such data is refused too.
+#[test]
+fn content_a_lookup_cannot_use_is_refused() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let s = Sampling::new(4, 6).expect("valid");
+    let data = synthetic(s);
+    let tamper = |dataset: &str, edit: &dyn Fn(&mut Vec<f64>)| {
+        let path = written(tmp.path(), &data);
+        let f = hdf5::File::open_rw(&path).expect("opens");
+        let ds = f.dataset(dataset).expect(dataset);
+        let mut v: Vec<f64> = ds.read_raw().expect("reads");
+        edit(&mut v);
+        ds.as_writer().write_raw(&v).expect("writes");
+        f.close().expect("closes");
+        let (e, msg) = open_err(&path, None);
+        assert!(matches!(e, AblError::Corrupt { .. }), "{msg}");
+        msg
+    };
+    let msg = tamper("translation/omega", &|v| v[3 * POINTS * 7 + 5] = f64::NAN);
+    assert!(
+        msg.contains("translation") && msg.contains("polar 1, azimuth 1") && msg.contains("NaN"),
+        "{msg}"
+    );
+    let msg = tamper("rotation/omega", &|v| v[11] = f64::INFINITY);
+    assert!(msg.contains("rotation") && msg.contains("inf"), "{msg}");
+    let msg = tamper("normals", &|v| v[9..12].fill(0.0));
+    assert!(
+        msg.contains("normal 3") && msg.contains("not a unit vector"),
+        "{msg}"
+    );
+    let msg = tamper("translation/azimuth_angles", &|v| v.reverse());
+    assert!(msg.contains("/translation/azimuth_angles[0]"), "{msg}");
+    let msg = tamper("rotation/directions", &|v| v.swap(24, 26));
+    assert!(
+        msg.contains("/rotation/directions[8]") && msg.contains("disagrees"),
+        "{msg}"
+    );
+    let msg = tamper("points", &|v| v[0] = f64::NEG_INFINITY);
+    assert!(
+        msg.contains("point 0") && msg.contains("not finite"),
+        "{msg}"
+    );
+
+    let mut bad = data.clone();
+    bad.normals[0] = Vec3::zeros();
+    let e = bad.write(&tmp.path().join("bad.h5")).expect_err("refused");
+    assert!(e.to_string().contains("normal 0"), "{e}");
+    assert!(!tmp.path().join("bad.h5").exists());
+}
+
 /// A mesh's fingerprint is that of its bytes and scale: the same mesh under another name gives
 /// the same fingerprint, a moved vertex or another scale a different one, so a database made
 /// for one mesh opens for its copy and is refused for the edited mesh.

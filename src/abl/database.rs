@@ -121,12 +121,21 @@ impl AblDatabase {
             (MotionKind::Translation, linear),
             (MotionKind::Rotation, angular),
         ] {
-            let speed = v.norm();
+            let mut speed = v.norm();
             if speed.is_nan() || speed <= TINY_SPEED {
                 continue;
             }
+            let direction = if speed.is_finite() {
+                v / speed
+            } else {
+                // |v|^2 overflowed: scale by the largest component first, so the direction
+                // is kept (v / inf would be zero and the lookup silently zero).
+                let scaled = v / v.amax();
+                speed = v.amax() * scaled.norm();
+                scaled.normalize()
+            };
             let table = self.data.table(kind);
-            for (row, w) in table.sampling.weights(&(v / speed)) {
+            for (row, w) in table.sampling.weights(&direction) {
                 if w != 0.0 {
                     terms.push((table.row(row, p), w * speed));
                 }

@@ -162,7 +162,8 @@ impl AblData {
         }
     }
 
-    /// Checks that the arrays agree with each other.
+    /// Checks that the arrays agree with each other and hold what a lookup can use: finite
+    /// points, unit normals, finite values in every computed row, and positive lengths.
     pub fn check(&self) -> Result<(), String> {
         let p = self.points.len();
         if p == 0 {
@@ -170,6 +171,39 @@ impl AblData {
         }
         if self.normals.len() != p {
             return Err(format!("{} normals for {p} points", self.normals.len()));
+        }
+        let h = &self.header;
+        for (name, v) in [
+            ("spacing", h.spacing),
+            ("layer_thickness", h.layer_thickness),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("attribute {name} = {v}: must be positive"));
+            }
+        }
+        if !h.beta.is_finite() {
+            return Err(format!("attribute beta = {}: must be finite", h.beta));
+        }
+        if let Some(i) = self
+            .points
+            .iter()
+            .position(|x| !x.iter().all(|c| c.is_finite()))
+        {
+            return Err(format!(
+                "point {i} is {:?}: not finite",
+                self.points[i].coords.as_slice()
+            ));
+        }
+        // Outward unit normals: a zero or unnormalised normal means a broken precomputation.
+        if let Some(i) = self
+            .normals
+            .iter()
+            .position(|n| !((n.norm() - 1.0).abs() < 1e-6))
+        {
+            return Err(format!(
+                "normal {i} is {:?}: not a unit vector",
+                self.normals[i].as_slice()
+            ));
         }
         for kind in MotionKind::ALL {
             let t = self.table(kind);
@@ -182,6 +216,20 @@ impl AblData {
                     t.omega.len(),
                     t.complete.len()
                 ));
+            }
+            for (row, _) in t.complete.iter().enumerate().filter(|(_, &c)| c) {
+                let values = t.row(row, p);
+                if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                    let s = t.sampling.azimuth;
+                    return Err(format!(
+                        "{}: direction (polar {}, azimuth {}) holds {} at point {}",
+                        kind.name(),
+                        row / s,
+                        row % s,
+                        values[k],
+                        k / 3
+                    ));
+                }
             }
         }
         Ok(())
@@ -325,6 +373,7 @@ fn read_body(file: &File) -> Result<AblData, Failure> {
         let omega = read_data(&g, "omega", Some(&[d, p, 3])).map_err(|e| format!("/{name}/{e}"))?;
         let done: Vec<u8> =
             read_data(&g, "complete", Some(&[d])).map_err(|e| format!("/{name}/{e}"))?;
+        check_directions(&g, sampling).map_err(|e| format!("/{name}/{e}"))?;
         tables.push(DirectionTable {
             sampling,
             omega,
@@ -342,6 +391,45 @@ fn read_body(file: &File) -> Result<AblData, Failure> {
     };
     data.check()?;
     Ok(data)
+}
+
+/// The stored polar and azimuth angles and directions must be the ones the sampling defines
+/// (this eddy's row order and angle conventions): a table written in another order would be
+/// looked up at the wrong directions without a sign.
+fn check_directions(g: &Group, s: Sampling) -> Result<(), Failure> {
+    let close = |a: Real, b: Real| (a - b).abs() <= 1e-9 * (1.0 + b.abs());
+    let polar: Vec<Real> = read_data(g, "polar_angles", Some(&[s.polar]))?;
+    if let Some(i) = (0..s.polar).find(|&i| !close(polar[i], s.polar_angle(i))) {
+        return Err(format!(
+            "polar_angles[{i}] = {}, expected {} (both poles included, from +z)",
+            polar[i],
+            s.polar_angle(i)
+        ));
+    }
+    let azimuth: Vec<Real> = read_data(g, "azimuth_angles", Some(&[s.azimuth]))?;
+    if let Some(j) = (0..s.azimuth).find(|&j| !close(azimuth[j], s.azimuth_angle(j))) {
+        return Err(format!(
+            "azimuth_angles[{j}] = {}, expected {} (increasing from +x towards +y)",
+            azimuth[j],
+            s.azimuth_angle(j)
+        ));
+    }
+    let dirs: Vec<Real> = read_data(g, "directions", Some(&[s.len(), 3]))?;
+    for i in 0..s.polar {
+        for j in 0..s.azimuth {
+            let r = s.row(i, j);
+            let want = s.direction(i, j);
+            if (0..3).any(|c| !close(dirs[3 * r + c], want[c])) {
+                return Err(format!(
+                    "directions[{r}] = {:?} disagrees with polar_angles[{i}] and \
+                     azimuth_angles[{j}] ({:?})",
+                    &dirs[3 * r..3 * r + 3],
+                    want.as_slice()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 fn write_str_attr(loc: &Group, name: &str, text: &str) -> Result<(), Failure> {

@@ -46,6 +46,14 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 pub fn lookup(args: &LookupArgs) -> anyhow::Result<()> {
     let db = AblDatabase::open(&args.database, None)?;
     let omega = db.lookup(&args.velocity, &args.angular);
+    if omega.iter().any(|w| !w.iter().all(|c| c.is_finite())) {
+        anyhow::bail!(
+            "the looked-up values overflow (are not finite) for --velocity {:?} and --angular \
+             {:?}: use physical speeds",
+            args.velocity.as_slice(),
+            args.angular.as_slice()
+        );
+    }
     let write = |out: &mut dyn std::io::Write| -> std::io::Result<()> {
         writeln!(out, "x,y,z,nx,ny,nz,omega_x,omega_y,omega_z")?;
         for ((p, n), w) in db.points().iter().zip(db.normals()).zip(&omega) {

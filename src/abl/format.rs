@@ -195,11 +195,10 @@ impl AblData {
             ));
         }
         // Outward unit normals: a zero or unnormalised normal means a broken precomputation.
-        if let Some(i) = self
-            .normals
-            .iter()
-            .position(|n| !((n.norm() - 1.0).abs() < 1e-6))
-        {
+        if let Some(i) = self.normals.iter().position(|n| {
+            let off = (n.norm() - 1.0).abs();
+            off.is_nan() || off >= 1e-6
+        }) {
             return Err(format!(
                 "normal {i} is {:?}: not a unit vector",
                 self.normals[i].as_slice()

@@ -474,7 +474,7 @@ fn huge_speeds_keep_their_direction() {
 
 /// Content a lookup cannot use is refused when the file is opened, naming what is wrong: a
 /// NaN in a computed row, a zero normal, azimuth angles in another order, directions that
-/// disagree with their angles. Writing such data is refused too.
+/// disagree with their angles, a flipped bit (Fletcher-32). Writing such data is refused too.
 #[test]
 fn content_a_lookup_cannot_use_is_refused() {
     let tmp = tempfile::tempdir().expect("temp dir");
@@ -514,6 +514,23 @@ fn content_a_lookup_cannot_use_is_refused() {
     let msg = tamper("points", &|v| v[0] = f64::NEG_INFINITY);
     assert!(
         msg.contains("point 0") && msg.contains("not finite"),
+        "{msg}"
+    );
+
+    // A flipped bit inside a table's data: the Fletcher-32 checksum refuses the read.
+    let path = written(tmp.path(), &data);
+    let mut bytes = std::fs::read(&path).expect("reads");
+    let value = data.translation.omega[3 * POINTS * 9 + 4].to_le_bytes();
+    let at = bytes
+        .windows(8)
+        .position(|w| w == value)
+        .expect("the value is stored raw");
+    bytes[at + 3] ^= 0x10;
+    std::fs::write(&path, &bytes).expect("writes");
+    let (e, msg) = open_err(&path, None);
+    assert!(matches!(e, AblError::Corrupt { .. }), "{msg}");
+    assert!(
+        msg.contains("translation") && msg.contains("omega"),
         "{msg}"
     );
 

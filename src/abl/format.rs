@@ -454,7 +454,18 @@ fn write_data<T: H5Type>(
     shape: &[usize],
 ) -> Result<(), Failure> {
     let what = format!("writing dataset {name}");
-    let ds = ctx(loc.new_dataset::<T>().shape(shape).create(name), &what)?;
+    // Chunked (one direction per chunk for the tables) with HDF5's Fletcher-32 checksum, which
+    // h5py reads transparently: a flipped byte makes the read fail instead of a wrong value.
+    let builder = loc.new_dataset::<T>().shape(shape);
+    let ds = if shape.iter().all(|&n| n > 0) {
+        let mut chunk = shape.to_vec();
+        if chunk.len() == 3 {
+            chunk[0] = 1;
+        }
+        ctx(builder.chunk(chunk).fletcher32().create(name), &what)?
+    } else {
+        ctx(builder.create(name), &what)?
+    };
     if !data.is_empty() {
         ctx(ds.as_writer().write_raw(data), &what)?;
     }

@@ -288,7 +288,8 @@ fn column(path: &Path, col: &str) -> Vec<Real> {
 }
 
 /// The shipped lid-driven cavity at Re 100 reaches a steady state (relative change per unit
-/// time below 1e-6), has one primary vortex (each centreline velocity changes sign once), and
+/// time below 1e-6), its centreline profiles end on the walls' velocities (the lid's 1 m/s),
+/// it has one primary vortex (each centreline velocity changes sign once), and
 /// its centreline extrema match Ghia, Ghia & Shin (1982, Tables I and II: u_min = -0.21090,
 /// v_max = 0.17527, v_min = -0.24533) within 2.5 %.
 #[test]
@@ -318,6 +319,10 @@ fn lid_driven_cavity_reaches_ghia_steady_state() {
                 .filter(|w| w[1].abs() <= 1e-3 && w[0].signum() != w[2].signum())
                 .count()
     };
+    // The profiles end on the walls with the walls' velocities: the lid's 1 m/s at the top.
+    let ends = |f: &[Real]| (f[0], f[f.len() - 1]);
+    assert_eq!(ends(&u), (0.0, 1.0), "u at the bottom and the lid");
+    assert_eq!(ends(&v), (0.0, 0.0), "v at the side walls");
     assert_eq!(sign_changes(&u[1..u.len() - 1]), 1, "u: {u:?}");
     assert_eq!(sign_changes(&v[1..v.len() - 1]), 1, "v: {v:?}");
     let min = |f: &[Real]| f.iter().cloned().fold(Real::INFINITY, Real::min);

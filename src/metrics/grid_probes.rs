@@ -7,7 +7,7 @@ use super::spec::Probe;
 use crate::io::{CsvSeries, IoError};
 use crate::{Point3, Real, Vec3};
 
-use crate::grid::GridSolver;
+use crate::grid::{GridSide, GridSolver};
 
 /// The force of the fluid on one obstacle, N.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -89,6 +89,39 @@ pub fn sample_point(solver: &GridSolver, x: &Vec3) -> (Real, Vec3) {
     (p, solver.mac.velocity_at(x))
 }
 
+/// The velocity at `x` with the domain's walls as boundary conditions: a tangential component's
+/// samples lie half a cell inside a side, where trilinear interpolation stops (a cavity's lid
+/// would read 0.95 instead of 1); within that half cell of a no-slip, moving or inflow side the
+/// component is interpolated linearly to the side's own velocity at the side. Free-slip, open and
+/// periodic sides keep the interpolated value (zero gradient or no side at all).
+pub fn velocity_with_walls(solver: &GridSolver, x: &Vec3) -> Vec3 {
+    let mac = &solver.mac;
+    let half = 0.5 * mac.dx;
+    let mut v = mac.velocity_at(x);
+    for (b, sides) in solver.bounds.sides.iter().enumerate() {
+        let extent = mac.dims[b] as Real * mac.dx;
+        for (end, side) in sides.iter().enumerate() {
+            let wall = match side {
+                GridSide::Wall => Vec3::zeros(),
+                GridSide::MovingWall(w) | GridSide::Inflow(w) => Vec3::from(*w),
+                GridSide::Slip | GridSide::Open | GridSide::Periodic => continue,
+            };
+            let plane = mac.origin[b] + if end == 0 { 0.0 } else { extent };
+            let gap = (x[b] - plane).abs();
+            if gap >= half {
+                continue;
+            }
+            let mut inner = *x;
+            inner[b] = plane + if end == 0 { half } else { -half };
+            let at_sample = mac.velocity_at(&inner);
+            for a in (0..3).filter(|&a| a != b) {
+                v[a] = wall[a] + (at_sample[a] - wall[a]) * gap / half;
+            }
+        }
+    }
+    v
+}
+
 /// Writes the velocity along a line probe as `path`: s (m along the line), x, y, z, u, v, w.
 pub fn write_profile(
     solver: &GridSolver,
@@ -104,7 +137,7 @@ pub fn write_profile(
     for i in 0..points {
         let t = i as Real / (points - 1) as Real;
         let x = a + (b - a) * t;
-        let v = solver.mac.velocity_at(&x);
+        let v = velocity_with_walls(solver, &x);
         csv.row(&[t * length, x.x, x.y, x.z, v.x, v.y, v.z])?;
     }
     Ok(())

@@ -306,7 +306,13 @@ impl Stage for GridTurbulence {
                         p.gain
                     ),
                 ),
-                (PARTS[1], format!("omega_ABL by {:?}", self.scheme)),
+                (
+                    PARTS[1],
+                    format!(
+                        "omega_ABL by {:?}, zero in obstacles, flushed below {FLUSH:e} of its peak",
+                        self.scheme
+                    ),
+                ),
                 (
                     PARTS[2],
                     format!(

@@ -493,3 +493,35 @@ proptest! {
         let _ = parse_with(MINIMAL, &[&format!("time.cfl={text}")]);
     }
 }
+
+/// A `[[probes]]` entry is a table tagged by `type`, whose errors serde reports for the whole
+/// array: the message still names the entry that is wrong, its key and its line.
+#[test]
+fn errors_inside_probes_point_at_the_entry_and_key() {
+    let probes = |second: &str| {
+        format!(
+            "{MINIMAL}[[probes]]\ntype = \"front\"\nname = \"a\"\naxis = \"x\"\n\n[[probes]]\n{second}"
+        )
+    };
+    // MINIMAL has 15 lines; the second entry's keys start on line 22.
+    for (second, parts) in [
+        (
+            "type = \"point\"\nname = \"b\"\npositon = [0.5, 0.5, 0.5]\n",
+            &["`probes[1].positon`", "line 24", "unknown key `positon`"][..],
+        ),
+        (
+            "type = \"pont\"\nname = \"b\"\n",
+            &["`probes[1].type`", "line 22", "unknown variant `pont`"][..],
+        ),
+        (
+            "type = \"point\"\nname = \"b\"\nposition = [0.5, \"x\", 0.5]\n",
+            &["`probes[1]`", "line 22", "invalid type"][..],
+        ),
+        (
+            "type = \"point\"\nname = \"b\"\n",
+            &["`probes[1]`", "missing key `position`"][..],
+        ),
+    ] {
+        assert_contains(&message(parse(&probes(second))), parts);
+    }
+}

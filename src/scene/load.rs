@@ -151,18 +151,61 @@ fn syntax_error(file: &Path, text: &str, error: &toml::de::Error) -> SceneError 
 /// `text` is the user's file, so that its line numbers are worth reporting.
 fn deserialize(text: &str, file: &Path, located: bool) -> Result<Scene, SceneError> {
     toml::from_str::<Scene>(text).map_err(|error| {
-        let message = key_wording(error.message());
-        let (key, offset) = match error.span() {
-            Some(span) if !span.is_empty() => locate(text, span, error.message()),
+        let (message, key, offset) = match (probe_error(text), error.span()) {
+            // A `[[probes]]` entry is a table tagged by `type`: serde buffers it and its errors
+            // carry the span of the whole array, so each entry is read again on its own.
+            (Some((message, key, offset)), _) => (message, key, offset),
+            (None, Some(span)) if !span.is_empty() => {
+                let (key, offset) = locate(text, span, error.message());
+                (error.message().to_owned(), key, offset)
+            }
             // serde reports a missing top-level key with an empty span.
-            _ => (String::new(), None),
+            _ => (error.message().to_owned(), String::new(), None),
         };
+        let message = key_wording(&message);
         SceneError::Schema {
             file: file.to_owned(),
             key,
             location: offset.filter(|_| located).map(|o| line_col(text, o)),
             message,
         }
+    })
+}
+
+/// The first `[[probes]]` entry that does not read as a probe: the error's message, its key
+/// (`probes[k]`, or `probes[k].KEY` when the message names an unknown key or `type`) and the
+/// offset of that key, else of the entry's first key.
+fn probe_error(text: &str) -> Option<(String, String, Option<usize>)> {
+    use serde::Deserialize;
+    let document: Table = toml::from_str(text).ok()?;
+    let probes = document.get("probes")?.as_array()?;
+    let (k, error) = probes
+        .iter()
+        .enumerate()
+        .find_map(|(k, p)| super::Probe::deserialize(p.clone()).err().map(|e| (k, e)))?;
+    let message = error.message().to_owned();
+    let root = toml::de::DeTable::parse(text).ok()?.into_inner();
+    let entry = root.iter().find(|(key, _)| key.get_ref() == "probes")?.1;
+    let DeValue::Array(entries) = entry.get_ref() else {
+        return None;
+    };
+    let DeValue::Table(table) = entries.get(k)?.get_ref() else {
+        return None;
+    };
+    let named = quoted_name(&message, "unknown field ");
+    let variant = quoted_name(&message, "unknown variant ");
+    let child = table.iter().find(|(key, v)| {
+        named == Some(key.get_ref().as_ref())
+            || (variant.is_some() && v.get_ref().as_str() == variant)
+    });
+    let first = table.iter().map(|(key, _)| key.span().start).min();
+    Some(match child {
+        Some((key, _)) => (
+            message,
+            format!("probes[{k}].{}", key.get_ref()),
+            Some(key.span().start),
+        ),
+        None => (message, format!("probes[{k}]"), first),
     })
 }
 

@@ -43,12 +43,17 @@ pub struct AblBenchOptions {
     /// Draw the U and k errors against wall time and the U profiles at the middle station into
     /// this PNG.
     pub plot: Option<PathBuf>,
+    /// Seeding is random: the `random` and `abl` runs are repeated with this many scene seeds
+    /// (the scene's, then the next ones), one row each, and summarised by label.
+    pub seeds: u64,
 }
 
 /// One run of the table.
 #[derive(Debug, Clone)]
 pub struct AblBenchRow {
     pub label: &'static str,
+    /// The scene seed of the run.
+    pub seed: u64,
     pub cells: usize,
     pub steps: u64,
     pub seconds: f64,
@@ -183,6 +188,7 @@ fn measure(
     Ok((
         AblBenchRow {
             label,
+            seed: scene.seed,
             cells: grid.resolution.iter().product(),
             steps,
             seconds,
@@ -218,28 +224,37 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     let n = grid.resolution;
     let coarse = (grid.spacing(&base), n[1]);
     let s = options.scale;
-    let configs: Vec<(&'static str, Scene)> = [
-        ("none", Ok(plain(base.clone()))),
-        ("random", load(&["turbulence.seeding=random".into()])),
-        ("abl", Ok(base.clone())),
-    ]
-    .into_iter()
-    .chain(
-        (!options.skip_reference && options.reference.is_none()).then(|| {
-            (
-                "reference",
-                load(&[format!(
-                    "grid.resolution=[{},{},{}]",
-                    n[0] * s,
-                    n[1] * s,
-                    n[2] * s
-                )])
-                .map(plain),
-            )
-        }),
-    )
-    .map(|(l, r)| r.map(|sc| (l, sc)))
-    .collect::<Result<_, _>>()?;
+    let seeded =
+        |label: &'static str, extra: Vec<String>| -> Vec<(&'static str, Result<Scene, RunError>)> {
+            (0..options.seeds.max(1))
+                .map(|k| {
+                    let mut all = extra.clone();
+                    all.push(format!("seed={}", base.seed + k));
+                    (label, load(&all))
+                })
+                .collect()
+        };
+    let configs: Vec<(&'static str, Scene)> = std::iter::once(("none", Ok(plain(base.clone()))))
+        .chain(seeded("random", vec!["turbulence.seeding=random".into()]))
+        .chain(seeded("abl", Vec::new()))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .chain(
+            (!options.skip_reference && options.reference.is_none()).then(|| {
+                (
+                    "reference",
+                    load(&[format!(
+                        "grid.resolution=[{},{},{}]",
+                        n[0] * s,
+                        n[1] * s,
+                        n[2] * s
+                    )])
+                    .map(plain),
+                )
+            }),
+        )
+        .map(|(l, r)| r.map(|sc| (l, sc)))
+        .collect::<Result<_, _>>()?;
     // A stored reference is read first: a bad file fails before the runs.
     let stored = options
         .reference
@@ -256,12 +271,11 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     if let Some(dir) = &options.profiles {
         std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, "creating", e))?;
         for (row, prof) in rows.iter().zip(&profiles) {
-            write_profiles(
-                &dir.join(format!("{}.csv", row.label)),
-                prof,
-                &options.stations,
-                coarse.0,
-            )?;
+            let name = match (options.seeds > 1, row.label) {
+                (true, "random" | "abl") => format!("{}_seed{}.csv", row.label, row.seed),
+                _ => format!("{}.csv", row.label),
+            };
+            write_profiles(&dir.join(name), prof, &options.stations, coarse.0)?;
         }
     }
     let reference = match stored {
@@ -393,14 +407,15 @@ pub fn table(rows: &[AblBenchRow]) -> String {
         .find(|r| r.label == "reference")
         .map(|r| r.seconds);
     let mut out = String::from(
-        "| run | cells | steps | wall s | / reference | vortex particles | mean k | U error | k error |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+        "| run | seed | cells | steps | wall s | / reference | vortex particles | mean k | U error | k error |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let share = reference.map_or("-".into(), |t| format!("1/{:.0}", t / r.seconds));
         out.push_str(&format!(
-            "| {} | {} | {} | {:.1} | {} | {} | {:.5} | {:.4} | {:.5} |\n",
+            "| {} | {} | {} | {} | {:.1} | {} | {} | {:.5} | {:.4} | {:.5} |\n",
             r.label,
+            r.seed,
             r.cells,
             r.steps,
             r.seconds,
@@ -410,6 +425,24 @@ pub fn table(rows: &[AblBenchRow]) -> String {
             r.u_error,
             r.k_error
         ));
+    }
+    for label in ["random", "abl"] {
+        let runs: Vec<&AblBenchRow> = rows.iter().filter(|r| r.label == label).collect();
+        let errors: Vec<Real> = runs
+            .iter()
+            .map(|r| r.u_error)
+            .filter(|e| e.is_finite())
+            .collect();
+        if errors.len() > 1 {
+            let mean = errors.iter().sum::<Real>() / errors.len() as Real;
+            let (lo, hi) = errors
+                .iter()
+                .fold((Real::MAX, Real::MIN), |(a, b), &e| (a.min(e), b.max(e)));
+            out.push_str(&format!(
+                "\n{label}: U error over {} seeds {mean:.4} (mean), {lo:.4} to {hi:.4}",
+                errors.len()
+            ));
+        }
     }
     out
 }

@@ -106,6 +106,9 @@ pub struct AblBenchArgs {
     /// Draw the errors against wall time and the middle station's U profiles into this PNG.
     #[arg(long, value_name = "PNG")]
     pub plot: Option<PathBuf>,
+    /// Repeat the random and abl runs with this many scene seeds (at least 1).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub seeds: u64,
 }
 
 impl From<AblBenchArgs> for AblBenchOptions {
@@ -118,6 +121,7 @@ impl From<AblBenchArgs> for AblBenchOptions {
             reference: a.reference,
             profiles: a.profiles,
             plot: a.plot,
+            seeds: a.seeds,
         }
     }
 }

@@ -174,28 +174,53 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
                 .draw()
                 .map_err(|e| fail(&e))?;
             for (k, curve) in curves {
-                let color = Palette99::pick(k).to_rgba();
-                chart
-                    .draw_series(LineSeries::new(curve, color.stroke_width(2)))
-                    .map_err(|e| fail(&e))?
-                    .label(runs[k].label.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
+                line(&mut chart, k, &runs[k].label, curve).map_err(|e| fail(&e))?;
             }
-            chart
-                .configure_series_labels()
-                .label_font(("sans-serif", 14))
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| fail(&e))?;
+            legend(&mut chart).map_err(|e| fail(&e))?;
         }
         Ok(skipped)
     })
 }
 
 type Canvas<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// A chart with linear axes, as `compare` and the profile panel draw them.
+type LinearChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// Draws curve `k` of a figure in the `k`-th palette colour, with its legend entry.
+fn line(
+    chart: &mut LinearChart<'_, '_>,
+    k: usize,
+    label: &str,
+    points: impl IntoIterator<Item = (Real, Real)>,
+) -> Result<(), String> {
+    let color = Palette99::pick(k).to_rgba();
+    chart
+        .draw_series(LineSeries::new(points, color.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    Ok(())
+}
+
+/// The legend box every panel of eddy's figures draws.
+fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    CT: plotters::coord::CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
+}
 
 /// Draws into a white PNG of `size` pixels with the bundled font, under a temporary name
 /// renamed to `out` when complete, so `out` is never half drawn.
@@ -295,13 +320,7 @@ pub fn error_figure(
                     .label(points[k].label.clone())
                     .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
             }
-            chart
-                .configure_series_labels()
-                .label_font(("sans-serif", 14))
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| fail(&e))?;
+            legend(&mut chart).map_err(|e| fail(&e))?;
         }
         let CurvePanel {
             title,
@@ -332,25 +351,9 @@ pub fn error_figure(
             .draw()
             .map_err(|e| fail(&e))?;
         for (k, (label, curve)) in curves.iter().enumerate() {
-            let color = Palette99::pick(k).to_rgba();
-            chart
-                .draw_series(LineSeries::new(
-                    curve.iter().copied(),
-                    color.stroke_width(2),
-                ))
-                .map_err(|e| fail(&e))?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+            line(&mut chart, k, label, curve.iter().copied()).map_err(|e| fail(&e))?;
         }
-        chart
-            .configure_series_labels()
-            .label_font(("sans-serif", 14))
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| fail(&e))?;
+        legend(&mut chart).map_err(|e| fail(&e))?;
         Ok(())
     })
 }

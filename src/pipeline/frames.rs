@@ -99,7 +99,7 @@ impl ParticleFrames {
         }))
     }
 
-    /// Position, velocity, density, pressure and the hooks' fields.
+    /// Position, velocity, density, pressure, the hooks' fields and the carried fields.
     pub fn write(&mut self, solver: &SphSolver) -> Result<(), IoError> {
         let w = &mut self.0;
         if !w.any() {
@@ -117,9 +117,13 @@ impl ParticleFrames {
             ],
         };
         let extra = solver.refinement_fields();
-        frame
-            .fields
-            .extend(extra.iter().map(|(name, data)| Field::vector(name, data)));
+        let carried = f.carried.iter().map(|(name, data)| (*name, data.as_slice()));
+        frame.fields.extend(
+            extra
+                .into_iter()
+                .chain(carried)
+                .map(|(name, data)| Field::vector(name, data)),
+        );
         w.push(
             &frame,
             frame.time,

@@ -22,6 +22,10 @@ pub struct FluidParticles {
     pub mass: Real,
     /// Rest density, kg/m^3.
     pub rest_density: Real,
+    /// Vector fields that ride on the particles, by name: reordered, spawned (as zero) and
+    /// removed with them, so particle motion is their advection (the SPH boundary layer's
+    /// omega_ABL, Pfaff et al. 2009 section 3.1). Written into the output frames.
+    pub carried: Vec<(&'static str, Vec<Vec3>)>,
 }
 
 impl FluidParticles {
@@ -66,6 +70,7 @@ impl FluidParticles {
             kappa_v: vec![0.0; n],
             mass: rest_density / lattice_kernel_sum(kernel, spacing),
             rest_density,
+            carried: Vec::new(),
         }
     }
 
@@ -92,6 +97,18 @@ impl FluidParticles {
         permute(&mut self.pressure, perm);
         permute(&mut self.kappa, perm);
         permute(&mut self.kappa_v, perm);
+        for (_, field) in &mut self.carried {
+            permute(field, perm);
+        }
+    }
+
+    /// The index of the carried field `name` in [`Self::carried`], added as zeros if absent.
+    pub fn carry(&mut self, name: &'static str) -> usize {
+        if let Some(i) = self.carried.iter().position(|(n, _)| *n == name) {
+            return i;
+        }
+        self.carried.push((name, vec![Vec3::zeros(); self.len()]));
+        self.carried.len() - 1
     }
 
     /// Bytes held by the per-particle arrays.
@@ -102,6 +119,11 @@ impl FluidParticles {
                 + self.kappa.capacity()
                 + self.kappa_v.capacity())
                 * std::mem::size_of::<Real>()
+            + self
+                .carried
+                .iter()
+                .map(|(_, f)| f.capacity() * std::mem::size_of::<Vec3>())
+                .sum::<usize>()
     }
 }
 

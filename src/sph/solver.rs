@@ -301,6 +301,7 @@ impl SphSolver {
             kappa_v,
             mass,
             rest_density,
+            ..
         } = &mut self.fluid;
         let rho0 = *rest_density;
         let nb = Neighborhood {

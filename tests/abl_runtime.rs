@@ -148,7 +148,7 @@ fn the_wall_layer_is_the_lookup_for_the_relative_motion() {
         let mut p = built(&scene_text.replace("cfl = 0.8", "cfl = 0.8\ndt = 1e-6"));
         p.step(None, None).expect("steps");
         let grid = p.sim.grid.as_ref().unwrap();
-        let abl = &p.sim.turbulence.as_ref().unwrap().abl;
+        let abl = p.sim.turbulence.as_ref().unwrap().abl.as_ref().unwrap();
         let pose = grid.bodies[0].pose(0.0);
         let expected = db.lookup_world(&pose, &relative, &Vec3::zeros());
         let cells = boundary_cells(grid, 0);
@@ -190,7 +190,7 @@ fn an_abl_blob_moves_with_the_stream() {
     let start = Vec3::new(1.0, 1.0, 1.0);
     let centroid = |p: &Pipeline| {
         let grid = p.sim.grid.as_ref().unwrap();
-        let w = &p.sim.turbulence.as_ref().unwrap().abl[2];
+        let w = &p.sim.turbulence.as_ref().unwrap().abl.as_ref().unwrap()[2];
         let (mut sum, mut weighted) = (0.0, Vec3::zeros());
         for (idx, &v) in w.indexed_iter() {
             let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
@@ -201,7 +201,7 @@ fn an_abl_blob_moves_with_the_stream() {
     };
     {
         let grid = p.sim.grid.as_ref().unwrap();
-        let w = &mut p.sim.turbulence.as_mut().unwrap().abl[2];
+        let w = &mut p.sim.turbulence.as_mut().unwrap().abl.as_mut().unwrap()[2];
         for (idx, v) in w.indexed_iter_mut() {
             let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
             *v = (-(x - start).norm_squared() / (2.0 * (2.0 * dx).powi(2))).exp();
@@ -307,37 +307,13 @@ fn bad_databases_and_turbulence_values_are_refused_clearly() {
     }
 }
 
-/// `abl` belongs to obstacles of grid scenes.
+/// `abl` belongs to obstacles, not to the container.
 #[test]
-fn abl_is_refused_on_the_container_and_without_a_grid() {
+fn abl_is_refused_on_the_container() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let sph = format!(
-        r#"
-name = "sph"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [1.0, 1.0, 1.0]
-[time]
-steps = 1
-[fluid]
-spacing = 0.05
-blocks = [{{ min = [0.1, 0.1, 0.1], max = [0.5, 0.5, 0.5] }}]
-[[obstacles]]
-shape = {{ type = "sphere", radius = {RADIUS} }}
-position = [0.7, 0.7, 0.7]
-{}
-"#,
-        abl_line(&db)
-    );
-    let e = scene(&sph).expect_err("refused");
-    assert!(
-        e.contains("obstacles[0].abl") && e.contains("[grid]"),
-        "{e}"
-    );
-    let container = sph
-        .replace("[[obstacles]]", "[container]")
-        .replace("position = [0.7, 0.7, 0.7]", "position = [0.5, 0.5, 0.5]");
+    let body = text(CENTRE, &abl_line(&db), "");
+    let container = body.replacen("[[obstacles]]", "[container]", 1);
     let e = scene(&container).expect_err("refused");
     assert!(e.contains("container.abl"), "{e}");
 }

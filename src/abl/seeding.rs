@@ -28,6 +28,10 @@ pub struct SeedSamples {
     pub volume: Vec<Real>,
     /// Distance to the nearest wall, the mixing length l_m of Eq. 8, m.
     pub wall_distance: Vec<Real>,
+    /// Largest radius a seed here may take, m: the wall distance, which
+    /// [`SeedSamples::limit_room`] may lower (on SPH particles, to the distance to the free
+    /// surface).
+    pub room: Vec<Real>,
 }
 
 impl SeedSamples {
@@ -47,6 +51,12 @@ impl SeedSamples {
         self.omega.push(omega);
         self.volume.push(volume);
         self.wall_distance.push(wall_distance);
+        self.room.push(wall_distance);
+    }
+
+    /// Lowers the room of sample `i` to at most `r`, m.
+    pub fn limit_room(&mut self, i: usize, r: Real) {
+        self.room[i] = self.room[i].min(r);
     }
 }
 
@@ -129,8 +139,8 @@ pub fn kernel_vorticity_integral(sigma: Real) -> Real {
 
 /// Figure 9, lines 11–20: visits the samples in index order and seeds at each with nonzero
 /// omega_ABL with probability p_T (Eq. 8), drawing one uniform number per such sample. A seed
-/// at sample i has the radius `r = min(r_max, l_m,i)` (section 4.3: as large as possible
-/// without touching an object); below `r_min` none is made and the layer is left as it is.
+/// at sample i has the radius `r = min(r_max, room_i)` (section 4.3: as large as possible
+/// without touching an object; the room is l_m,i unless the caller lowered it); below `r_min` none is made and the layer is left as it is.
 /// Otherwise the samples closer than r (i included) give up their omega_ABL times volume
 /// (lines 15–17) and a particle at x_i gets `omega_p = removed / K(sigma)` (line 18,
 /// [`kernel_vorticity_integral`]). A sample emptied earlier in the call draws nothing.
@@ -145,7 +155,10 @@ pub fn seed(
 ) -> Vec<Seed> {
     let n = samples.len();
     debug_assert!(
-        samples.omega.len() == n && samples.volume.len() == n && samples.wall_distance.len() == n
+        samples.omega.len() == n
+            && samples.volume.len() == n
+            && samples.wall_distance.len() == n
+            && samples.room.len() == n
     );
     let mut seeds = Vec::new();
     if params.u0.is_nan() || params.u0 <= 0.0 {
@@ -163,7 +176,7 @@ pub fn seed(
         if rng.random::<Real>() >= probability(rate, l_m, omega2) {
             continue;
         }
-        let r = params.r_max.min(l_m);
+        let r = params.r_max.min(samples.room[i]);
         if r <= 0.0 || r < params.r_min {
             continue;
         }

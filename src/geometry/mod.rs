@@ -306,6 +306,25 @@ impl RigidBody {
         }
     }
 
+    /// The world-space bounding box of the body at time `t`.
+    pub fn world_aabb(&self, t: Real) -> (Vec3, Vec3) {
+        let (lo, hi) = self.local_aabb();
+        let pose = self.pose(t);
+        let mut min = Vec3::repeat(Real::INFINITY);
+        let mut max = Vec3::repeat(Real::NEG_INFINITY);
+        for corner in 0..8 {
+            let p = Point3::new(
+                if corner & 1 == 0 { lo.x } else { hi.x },
+                if corner & 2 == 0 { lo.y } else { hi.y },
+                if corner & 4 == 0 { lo.z } else { hi.z },
+            );
+            let w = pose * p;
+            min = min.inf(&w.coords);
+            max = max.sup(&w.coords);
+        }
+        (min, max)
+    }
+
     /// Corners (min, max) of the body-local axis-aligned bounding box.
     pub fn local_aabb(&self) -> (Point3, Point3) {
         let aabb = self.geometry.parry().compute_local_aabb();

@@ -333,7 +333,7 @@ pub(super) fn cells_near(
     t: Real,
     margin: Real,
 ) -> [std::ops::Range<usize>; 3] {
-    let (lo, hi) = world_aabb(body, t);
+    let (lo, hi) = body.world_aabb(t);
     std::array::from_fn(|a| {
         let g0 = ((lo[a] - margin - grid.origin[a]) / grid.dx - 0.5)
             .floor()
@@ -343,23 +343,4 @@ pub(super) fn cells_near(
             .max(0.0) as usize;
         g0.min(grid.dims[a])..g1.min(grid.dims[a])
     })
-}
-
-/// The world-space bounding box of a body at time `t`.
-fn world_aabb(body: &RigidBody, t: Real) -> (Vec3, Vec3) {
-    let (lo, hi) = body.local_aabb();
-    let pose = body.pose(t);
-    let mut min = Vec3::repeat(Real::INFINITY);
-    let mut max = Vec3::repeat(Real::NEG_INFINITY);
-    for corner in 0..8 {
-        let p = Point3::new(
-            if corner & 1 == 0 { lo.x } else { hi.x },
-            if corner & 2 == 0 { lo.y } else { hi.y },
-            if corner & 4 == 0 { lo.z } else { hi.z },
-        );
-        let w = pose * p;
-        min = min.inf(&w.coords);
-        max = max.sup(&w.coords);
-    }
-    (min, max)
 }

@@ -20,10 +20,12 @@ pub struct StateMetrics {
 }
 
 impl MetricsRecorder {
-    /// Creates `path` with the header for `metrics`.
-    pub fn create(path: &Path, metrics: &[Metric]) -> Result<Self, IoError> {
+    /// Creates `path` with the header for `metrics`, then the `extra` columns another stage
+    /// reports (the turbulence stage's).
+    pub fn create(path: &Path, metrics: &[Metric], extra: &[String]) -> Result<Self, IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
         columns.extend(metrics.iter().map(|m| m.column().to_string()));
+        columns.extend(extra.iter().cloned());
         Ok(Self {
             metrics: metrics.to_vec(),
             csv: CsvSeries::create(path, &columns)?,
@@ -71,13 +73,15 @@ impl MetricsRecorder {
         StateMetrics { values }
     }
 
-    /// Writes the row of a step: the state it started from and what the step did.
+    /// Writes the row of a step: the state it started from, what the step did, and the values
+    /// of the extra columns.
     pub fn write(
         &mut self,
         step: u64,
         time: Real,
         state: &StateMetrics,
         stats: &StepStats,
+        extra: &[Real],
     ) -> Result<(), IoError> {
         self.row.clear();
         self.row.extend([step as Real, time, stats.dt]);
@@ -89,6 +93,7 @@ impl MetricsRecorder {
                 _ => *v,
             });
         }
+        self.row.extend_from_slice(extra);
         self.csv.row(&self.row)
     }
 }

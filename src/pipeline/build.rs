@@ -10,7 +10,7 @@ use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
     StepRecord,
 };
-use super::turbulence::GridTurbulence;
+use super::turbulence::{GridTurbulence, SphTurbulence};
 use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::{GridError, GridSolver};
@@ -187,22 +187,27 @@ impl Pipeline {
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let mut sim = Simulation::new(sph, grid);
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
-        let turbulence = match (build::abl_settings(scene), scene.grid.as_ref()) {
-            (Some(settings), Some(grid)) => {
+        // The grid's turbulence in a scene with a grid, else the fluid's (a coupled scene's
+        // obstacles drive the grid).
+        let turbulence: Option<Box<dyn Stage>> = match build::abl_settings(scene) {
+            Some(settings) => {
                 let shapes: Vec<_> = scene
                     .container
                     .iter()
                     .chain(&scene.obstacles)
                     .map(|b| b.shape.clone())
                     .collect();
-                Some(GridTurbulence::build(
-                    settings,
-                    &mut sim,
-                    &shapes,
-                    grid.advection,
-                )?)
+                Some(match scene.grid.as_ref() {
+                    Some(grid) => Box::new(GridTurbulence::build(
+                        settings,
+                        &mut sim,
+                        &shapes,
+                        grid.advection,
+                    )?),
+                    None => Box::new(SphTurbulence::build(settings, &mut sim, &shapes)?),
+                })
             }
-            _ => None,
+            None => None,
         };
         let probes = &scene.probes;
         let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
@@ -228,14 +233,17 @@ impl Pipeline {
                 recorder: None,
             }));
         }
+        let (grid_turbulence, sph_turbulence) = match turbulence {
+            Some(t) if sim.grid.is_some() => (Some(t), None),
+            t => (None, t),
+        };
         if sim.sph.is_some() {
+            stages.extend(sph_turbulence);
             stages.push(Box::new(SphStep));
             stages.push(Box::new(SphNeighbours));
         }
-        if let Some(t) = turbulence {
-            stages.push(Box::new(t));
-        }
         if sim.grid.is_some() {
+            stages.extend(grid_turbulence);
             stages.push(Box::new(GridStep));
         }
         if sim.sph.is_some() && !scene.output.metrics.is_empty() {

@@ -117,7 +117,10 @@ impl ParticleFrames {
             ],
         };
         let extra = solver.refinement_fields();
-        let carried = f.carried.iter().map(|(name, data)| (*name, data.as_slice()));
+        let carried = f
+            .carried
+            .iter()
+            .map(|(name, data)| (*name, data.as_slice()));
         frame.fields.extend(
             extra
                 .into_iter()
@@ -187,8 +190,7 @@ impl GridFrames {
             GridField::scalar("pressure", solver.pressure.view()),
             GridField::scalar("solid", solid.view()),
         ];
-        if let Some(t) = turbulence {
-            let [x, y, z] = &t.abl;
+        if let Some([x, y, z]) = turbulence.and_then(|t| t.abl.as_ref()) {
             fields.push(GridField::vector(
                 "abl_vorticity",
                 [x.view(), y.view(), z.view()],

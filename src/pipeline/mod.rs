@@ -25,7 +25,10 @@ pub use frames::{GridFrames, Kind, ParticleFrames};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
 pub use stages::{Stage, StepRecord};
-pub use turbulence::{GridTurbulence, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER};
+pub use turbulence::{
+    fit_to_liquid, GridTurbulence, SphTurbulence, Surface, Turbulence, TurbulenceStats, ABL_FIELD,
+    SHELL_INNER, SHELL_OUTER,
+};
 
 use crate::abl::AblError;
 use crate::geometry::GeometryError;

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::simulation::{Simulation, StepError};
-use super::turbulence::{TurbulenceStats, PARTS};
+use super::turbulence::{Turbulence, TurbulenceStats};
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
@@ -182,6 +182,16 @@ fn probe_line(file: &str, probes: &[Probe]) -> String {
     format!("{file}: {}", names.join(", "))
 }
 
+/// The turbulence state when it is the SPH fluid's (its columns go into the SPH metrics).
+fn particle_turbulence(sim: &Simulation) -> Option<&Turbulence> {
+    sim.turbulence.as_ref().filter(|t| t.abl.is_none())
+}
+
+/// The grid's turbulence state (its columns go into the grid metrics).
+fn grid_turbulence(sim: &Simulation) -> Option<&Turbulence> {
+    sim.turbulence.as_ref().filter(|t| t.abl.is_some())
+}
+
 /// The SPH row of each step: the state the step started from and what the step did. It runs
 /// after the step and keeps the state it measures for the next row.
 pub struct SphMetrics {
@@ -196,20 +206,23 @@ impl Stage for SphMetrics {
         "metrics"
     }
 
-    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         let names: Vec<_> = self.metrics.iter().map(|m| m.column()).collect();
         (
             format!(
-                "{}: {} (state at the start of each step)",
+                "{}: {} (state at the start of each step){}",
                 self.file,
-                names.join(", ")
+                names.join(", "),
+                particle_turbulence(sim)
+                    .map_or(String::new(), |t| format!("; {}", t.describe_columns()))
             ),
             Vec::new(),
         )
     }
 
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
-        let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics)?;
+        let extra = particle_turbulence(sim).map_or(Vec::new(), |t| t.columns());
+        let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics, &extra)?;
         let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
         let state = recorder.measure(sph, &self.gravity);
         self.recorder = Some((recorder, state));
@@ -220,7 +233,11 @@ impl Stage for SphMetrics {
         let (Some((recorder, state)), Some(stats)) = (self.recorder.as_mut(), rec.sph) else {
             return Ok(());
         };
-        recorder.write(rec.step, rec.time, state, &stats)?;
+        let extra = match (particle_turbulence(sim), rec.turbulence) {
+            (Some(_), Some(t)) => t.row(),
+            _ => Vec::new(),
+        };
+        recorder.write(rec.step, rec.time, state, &stats, &extra)?;
         *state = recorder.measure(sim.sph(), &self.gravity);
         Ok(())
     }
@@ -238,17 +255,6 @@ const GRID_METRICS: [&str; 10] = [
     "advect_seconds",
     "project_seconds",
     "step_seconds",
-];
-
-/// Columns of the turbulence stage after the grid's, then one `*_seconds` per part.
-const TURBULENCE_METRICS: [&str; 7] = [
-    "vortex_particles",
-    "seeded",
-    "split",
-    "merged",
-    "dissipated",
-    "vortex_energy",
-    "abl_magnitude_sum",
 ];
 
 /// The grid row of each step: what the step did and the kinetic energy it ended with, and what
@@ -269,12 +275,8 @@ impl Stage for GridMetrics {
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
                  change rate, stage times{}",
                 self.file,
-                if sim.turbulence.is_some() {
-                    "; vortex particles, seeded, split, merged, dissipated, vortex energy, ABL \
-                     magnitude sum, turbulence part times"
-                } else {
-                    ""
-                }
+                grid_turbulence(sim)
+                    .map_or(String::new(), |t| format!("; {}", t.describe_columns()))
             ),
             Vec::new(),
         )
@@ -283,9 +285,8 @@ impl Stage for GridMetrics {
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
         columns.extend(GRID_METRICS.map(String::from));
-        if sim.turbulence.is_some() {
-            columns.extend(TURBULENCE_METRICS.map(String::from));
-            columns.extend(PARTS.map(|p| format!("{}_seconds", p.replace(' ', "_"))));
+        if let Some(t) = grid_turbulence(sim) {
+            columns.extend(t.columns());
         }
         self.csv = Some(CsvSeries::create(&out.join(&self.file), &columns)?);
         Ok(())
@@ -311,10 +312,8 @@ impl Stage for GridMetrics {
             s.project_seconds,
             s.total_seconds,
         ];
-        if let Some(t) = rec.turbulence {
-            row.extend([t.particles, t.seeded, t.split, t.merged, t.dissipated].map(|n| n as Real));
-            row.extend([t.energy, t.abl_sum]);
-            row.extend(t.seconds);
+        if let (Some(_), Some(t)) = (grid_turbulence(sim), rec.turbulence) {
+            row.extend(t.row());
         }
         csv.row(&row)?;
         Ok(())

@@ -56,19 +56,6 @@ impl Scene {
             ));
         }
         let with_abl = self.abl_obstacles().count();
-        if with_abl > 0 && self.grid.is_none() {
-            let (i, _) = self
-                .obstacles
-                .iter()
-                .enumerate()
-                .find(|(_, b)| b.abl.is_some())
-                .expect("counted above");
-            return Err(c.invalid(
-                format!("obstacles[{i}].abl"),
-                "a scene without [grid]",
-                "a [grid]: boundary-layer seeding on SPH particles is not built yet",
-            ));
-        }
         for (i, b) in self.obstacles.iter().enumerate() {
             let Some(abl) = &b.abl else { continue };
             if !abl.database.is_file() {

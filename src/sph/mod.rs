@@ -17,6 +17,7 @@ pub mod pair_cache;
 pub mod params;
 pub mod solver;
 pub mod vortex_coupling;
+pub mod walls;
 
 pub use hooks::{StepContext, StepHook};
 pub use kernel::CubicSpline;

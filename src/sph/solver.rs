@@ -127,15 +127,8 @@ impl SphSolver {
         // Akinci walls hold fluid about 1.5 spacings off (see `boundary`): lattice sites closer
         // than one spacing to a surface, or inside an obstacle, stay empty.
         let keep = |x: &Vec3| {
-            let p = crate::Point3::from(*x);
-            bodies.iter().enumerate().all(|(i, b)| {
-                let d = b.signed_distance(0.0, &p);
-                if i == 0 && params.container {
-                    d <= -spacing
-                } else {
-                    d >= spacing
-                }
-            })
+            super::walls::wall_distance(&bodies, params.container, 0.0, &crate::Point3::from(*x))
+                >= spacing
         };
         let fluid = FluidParticles::from_blocks(
             &params.blocks,
@@ -179,6 +172,11 @@ impl SphSolver {
     /// Steps taken.
     pub fn steps(&self) -> u64 {
         self.step
+    }
+
+    /// Whether body 0 is the container the fluid sits in.
+    pub fn has_container(&self) -> bool {
+        self.params.container
     }
 
     /// The fluid/boundary neighbourhood of the current state.

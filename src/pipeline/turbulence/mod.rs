@@ -1,0 +1,271 @@
+//! The turbulence stages: Pfaff et al. 2009, Figure 9, lines 1–25, run before the solver's own
+//! step (line 28), on a grid ([`grid`]) or on SPH particles ([`sph`]). Both share what this
+//! module holds: the obstacles' databases, the ambient flow around an obstacle, the seeding
+//! routine of [`crate::abl::seeding`] (one function for cells and particles), and the vortex
+//! layer's dynamics, reading and writing the solver through its velocity source and sink.
+//!
+//! **Ambient flow.** An obstacle's velocity relative to the flow is its own velocity minus the
+//! mean fluid velocity over a shell between [`SHELL_INNER`] and [`SHELL_OUTER`] times its
+//! reach (half its bounding-box diagonal, at least two cells or spacings) from its surface.
+//! The disturbance a body makes in a potential flow is a dipole at leading order, whose mean
+//! over a shell around the body vanishes, so the shell mean reads the stream the body sits in:
+//! a fixed sphere in a stream U sees -U, one moving at V in still fluid sees V. The obstacle's
+//! own angular velocity is used as is: the flow a spinning body drags along is its own boundary
+//! layer, not an ambient rotation.
+
+mod grid;
+mod sph;
+
+pub use grid::GridTurbulence;
+pub use sph::{fit_to_liquid, SphTurbulence, Surface, ABL_FIELD};
+
+use std::time::Instant;
+
+use ndarray::Array3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::RunError;
+use crate::abl::seeding::{Seed, SeedingParams};
+use crate::abl::{AblDatabase, AblSettings, Seeding, WallLayer};
+use crate::geometry::{RigidBody, Shape};
+use crate::vortex::{Dynamics, DynamicsSettings, VortexParticles};
+use crate::{Real, Vec3};
+
+/// Inner radius of the ambient-flow shell, in reaches of the obstacle from its surface.
+pub const SHELL_INNER: Real = 0.5;
+/// Outer radius of the ambient-flow shell, in reaches of the obstacle from its surface.
+pub const SHELL_OUTER: Real = 1.5;
+
+/// Salt of the seeding generator's seed, so it draws a different stream from the split
+/// displacements of the same scene seed.
+const SEEDING_STREAM: u64 = 0x5eed_ab1e;
+
+/// The turbulence state a scene carries from step to step.
+pub struct Turbulence {
+    /// omega_ABL per grid cell, 1/s, one array per component (grid scenes; on SPH particles
+    /// it rides on the fluid as the carried field [`ABL_FIELD`]).
+    pub abl: Option<[Array3<Real>; 3]>,
+    pub vortices: VortexParticles,
+    /// The stage's parts, in order (the `*_seconds` columns of the metrics).
+    pub parts: &'static [&'static str; 5],
+}
+
+/// What the turbulence stage did in one step.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TurbulenceStats {
+    pub seeded: usize,
+    pub split: usize,
+    pub merged: usize,
+    /// Particles dissipated below the dissipation radius, or (SPH) centred outside the liquid.
+    pub dissipated: usize,
+    /// Particles after the step's dynamics.
+    pub particles: usize,
+    /// Total kernel energy of the particles, m^5/s^2.
+    pub energy: Real,
+    /// Sum of |omega_ABL| over the cells or particles after seeding, 1/s.
+    pub abl_sum: Real,
+    /// Wall time of each part, in the order of [`Turbulence::parts`].
+    pub seconds: [f64; 5],
+}
+
+/// Columns of the turbulence stage in `metrics.csv`, then one `*_seconds` per part.
+const COLUMNS: [&str; 7] = [
+    "vortex_particles",
+    "seeded",
+    "split",
+    "merged",
+    "dissipated",
+    "vortex_energy",
+    "abl_magnitude_sum",
+];
+
+impl Turbulence {
+    /// The metrics columns of its stage.
+    pub fn columns(&self) -> Vec<String> {
+        let mut out: Vec<String> = COLUMNS.map(String::from).to_vec();
+        out.extend(
+            self.parts
+                .map(|p| format!("{}_seconds", p.replace(' ', "_"))),
+        );
+        out
+    }
+
+    /// The plan's note on the metrics columns it adds.
+    pub fn describe_columns(&self) -> &'static str {
+        "vortex particles, seeded, split, merged, dissipated, vortex energy, ABL magnitude sum, \
+         turbulence part times"
+    }
+}
+
+impl TurbulenceStats {
+    /// Its values in the order of [`Turbulence::columns`].
+    pub fn row(&self) -> Vec<Real> {
+        let mut row: Vec<Real> = [
+            self.particles,
+            self.seeded,
+            self.split,
+            self.merged,
+            self.dissipated,
+        ]
+        .map(|n| n as Real)
+        .to_vec();
+        row.extend([self.energy, self.abl_sum]);
+        row.extend(self.seconds);
+        row
+    }
+}
+
+/// One obstacle with a database.
+struct Obstacle {
+    /// Its index among the solver's bodies.
+    body: usize,
+    layer: WallLayer,
+    /// Half the bounding-box diagonal, at least two cells or spacings, m.
+    reach: Real,
+}
+
+impl Obstacle {
+    /// omega_pre at its boundary points in the world frame at time `t`, for the obstacle moving
+    /// relative to the `ambient` flow (see the module documentation).
+    fn values(&self, body: &RigidBody, t: Real, ambient: Option<Vec3>, gain: Real) -> Vec<Vec3> {
+        let linear = body.linear_velocity(t) - ambient.unwrap_or_else(Vec3::zeros);
+        self.layer
+            .values(&body.pose(t), &linear, &body.angular_velocity(t), gain)
+    }
+}
+
+/// What both stages build the same way: the databases, the vortex dynamics and the seeding
+/// generator.
+struct Common {
+    settings: AblSettings,
+    obstacles: Vec<Obstacle>,
+    dynamics: Dynamics,
+    rng: ChaCha8Rng,
+    /// The cell size or particle spacing the radii of [`crate::abl::TurbulenceParams`] count
+    /// in, m.
+    dx: Real,
+}
+
+impl Common {
+    /// Opens every database of `settings` (checking it belongs to its obstacle in `shapes`) for
+    /// a solver with cell size or spacing `dx` among `bodies`.
+    fn build(
+        settings: AblSettings,
+        shapes: &[Shape],
+        bodies: &[RigidBody],
+        dx: Real,
+    ) -> Result<Self, RunError> {
+        let mut obstacles = Vec::new();
+        for (body, path) in &settings.databases {
+            let db = AblDatabase::open(path, Some(&shapes[*body]))?;
+            let spacing = db.header().spacing;
+            let (lo, hi) = bodies[*body].local_aabb();
+            obstacles.push(Obstacle {
+                body: *body,
+                layer: WallLayer::new(db, 2.0 * (dx + spacing)),
+                reach: (0.5 * (hi - lo).norm()).max(2.0 * dx),
+            });
+        }
+        let p = &settings.params;
+        let dynamics = Dynamics::new(
+            DynamicsSettings {
+                dissipation_cells: p.dissipation_radius,
+                inertial_radius: p.split_radius * dx,
+                children: p.children,
+                cascade_time: p.cascade_time,
+                ..Default::default()
+            },
+            settings.seed,
+        )?;
+        Ok(Self {
+            rng: ChaCha8Rng::seed_from_u64(settings.seed ^ SEEDING_STREAM),
+            settings,
+            obstacles,
+            dynamics,
+            dx,
+        })
+    }
+
+    /// Eq. 8's parameters in metres.
+    fn seeding_params(&self) -> SeedingParams {
+        let p = &self.settings.params;
+        SeedingParams {
+            c_p: p.c_p,
+            u0: self.settings.u0,
+            r_max: p.r_max * self.dx,
+            r_min: p.dissipation_radius * self.dx,
+        }
+    }
+
+    /// The plan's headline and its lines for the wall layer, seeding and vortex dynamics;
+    /// `unit` names what the radii count ("cells", "spacings").
+    fn describe(&self, unit: &str) -> (String, [String; 3]) {
+        let p = &self.settings.params;
+        let names: Vec<String> = self
+            .obstacles
+            .iter()
+            .map(|o| {
+                let db = o.layer.database();
+                format!(
+                    "{} ({}, {} points)",
+                    db.header().obstacle,
+                    db.path().display(),
+                    db.len()
+                )
+            })
+            .collect();
+        let seeding = match p.seeding {
+            Seeding::Abl => "Eq. 8 from omega_ABL",
+            Seeding::Random => "random along the walls (Figure 8 baseline)",
+        };
+        (
+            format!(
+                "artificial boundary layers (Pfaff et al. 2009, Figure 9) of {}",
+                names.join(", ")
+            ),
+            [
+                format!("lookup per obstacle, gain {}", p.gain),
+                format!(
+                    "{seeding}: c_p = {} 1/s, |U_0| = {} m/s, r_max = {} {unit}",
+                    p.c_p, self.settings.u0, p.r_max
+                ),
+                format!(
+                    "advect, stretch, merge, split at radius <= {} {unit} into {}, dissipate \
+                     below {} {unit}",
+                    p.split_radius, p.children, p.dissipation_radius
+                ),
+            ],
+        )
+    }
+}
+
+/// Adds the seeds to the vortex particles.
+fn push_seeds(seeds: &[Seed], vortices: &mut VortexParticles) {
+    for s in seeds {
+        vortices
+            .push(s.x, s.omega, s.sigma)
+            .expect("seeds are finite with a positive scale");
+    }
+}
+
+/// Wall time of each part of a step.
+struct Laps {
+    clock: Instant,
+    seconds: [f64; 5],
+}
+
+impl Laps {
+    fn start() -> Self {
+        Self {
+            clock: Instant::now(),
+            seconds: [0.0; 5],
+        }
+    }
+
+    /// Ends part `i`.
+    fn lap(&mut self, i: usize) {
+        self.seconds[i] = self.clock.elapsed().as_secs_f64();
+        self.clock = Instant::now();
+    }
+}

@@ -47,7 +47,7 @@ impl VelocitySink for Points {
     fn layout(&self) -> SinkLayout<'_> {
         SinkLayout::Points(&self.x)
     }
-    fn vorticity(&self) -> SinkVorticity<'_> {
+    fn vorticity(&self, _only: Option<&[bool]>) -> SinkVorticity<'_> {
         SinkVorticity::Points(vec![Vec3::zeros(); self.x.len()])
     }
     fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {

@@ -194,12 +194,17 @@ impl CellGrid {
     /// than `radius` (at most the cell size) to the arbitrary point `p`.
     pub fn for_each_near(&self, p: &Vec3, points: &[Vec3], radius: Real, mut f: impl FnMut(usize)) {
         let c = cell_of(p, 1.0 / self.cell);
-        let mut ranges = Vec::with_capacity(27);
-        self.ranges_around(c, &mut ranges);
-        for (s, e) in ranges {
-            for j in s..e {
-                if (p - points[j as usize]).norm_squared() < radius * radius {
-                    f(j as usize);
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let Some((s, e)) = self.lookup([c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                        continue;
+                    };
+                    for j in s..e {
+                        if (p - points[j as usize]).norm_squared() < radius * radius {
+                            f(j as usize);
+                        }
+                    }
                 }
             }
         }
@@ -212,6 +217,10 @@ pub(crate) struct PointHash {
     original: Vec<u32>,
     grid: CellGrid,
     cell: Real,
+    /// Bounding box of the points: a query farther than its radius from it is answered
+    /// without touching the table (most queries, when a few points sit among many queries).
+    lo: Vec3,
+    hi: Vec3,
 }
 
 impl PointHash {
@@ -220,11 +229,19 @@ impl PointHash {
         let original = cell_order(points, cell);
         let sorted: Vec<Vec3> = original.iter().map(|&i| points[i as usize]).collect();
         let grid = CellGrid::build(&sorted, cell);
+        let lo = sorted
+            .iter()
+            .fold(Vec3::repeat(Real::INFINITY), |m, x| m.inf(x));
+        let hi = sorted
+            .iter()
+            .fold(Vec3::repeat(Real::NEG_INFINITY), |m, x| m.sup(x));
         Self {
             sorted,
             original,
             grid,
             cell,
+            lo,
+            hi,
         }
     }
 
@@ -233,6 +250,9 @@ impl PointHash {
     #[inline]
     pub(crate) fn for_each_near(&self, p: &Vec3, radius: Real, mut f: impl FnMut(usize)) {
         debug_assert!(radius <= self.cell * (1.0 + 1e-12));
+        if (0..3).any(|a| p[a] < self.lo[a] - radius || p[a] > self.hi[a] + radius) {
+            return;
+        }
         self.grid
             .for_each_near(p, &self.sorted, radius, |j| f(self.original[j] as usize));
     }

@@ -41,7 +41,7 @@ impl VelocitySink for MacGrid {
         })
     }
 
-    fn vorticity(&self) -> SinkVorticity<'_> {
+    fn vorticity(&self, _only: Option<&[bool]>) -> SinkVorticity<'_> {
         let cells = CellVorticity::new(self);
         SinkVorticity::Cells(Box::new(move |idx, out| cells.row(idx, out)))
     }

@@ -489,13 +489,18 @@ impl SphSolver {
     /// The vorticity curl v of the current state, by the shared difference curl (with the
     /// walls when a hook lets them into its operators).
     pub fn vorticity(&self) -> Vec<Vec3> {
+        self.vorticity_on(None)
+    }
+
+    /// [`Self::vorticity`] only at the particles where `only` holds (zero elsewhere).
+    pub fn vorticity_on(&self, only: Option<&[bool]>) -> Vec<Vec3> {
         let volume = operators::volumes(self.fluid.mass, &self.fluid.density);
         Operators {
             nb: self.neighborhood(),
             volume: &volume,
             walls: self.hooks.iter().any(|h| h.walls()),
         }
-        .curl(&self.fluid.v, WallField::Velocity)
+        .curl_on(&self.fluid.v, WallField::Velocity, only)
     }
 
     /// Rotational kinetic energy held by the hooks (a micropolar refinement), J.

@@ -76,8 +76,8 @@ impl VelocitySink for SphSolver {
         SinkLayout::Points(&self.fluid.x)
     }
 
-    fn vorticity(&self) -> SinkVorticity<'_> {
-        SinkVorticity::Points(SphSolver::vorticity(self))
+    fn vorticity(&self, only: Option<&[bool]>) -> SinkVorticity<'_> {
+        SinkVorticity::Points(self.vorticity_on(only))
     }
 
     fn add_velocity(&mut self, add: &mut AddVelocity<'_>) -> Result<(), VortexError> {

@@ -97,8 +97,10 @@ pub trait VelocitySink {
     /// The sink's samples.
     fn layout(&self) -> SinkLayout<'_>;
     /// The sink's own vorticity: [`SinkVorticity::Cells`] for [`SinkLayout::Faces`],
-    /// [`SinkVorticity::Points`] for [`SinkLayout::Points`].
-    fn vorticity(&self) -> SinkVorticity<'_>;
+    /// [`SinkVorticity::Points`] for [`SinkLayout::Points`]. Synthesis reads it only under the
+    /// particles' cut-offs, so a point sink is told those points in `only` and may leave the
+    /// others zero (a cell sink reads its cells on demand and ignores it).
+    fn vorticity(&self, only: Option<&[bool]>) -> SinkVorticity<'_>;
     /// Lends the velocity samples to `add`, which adds to them in place, then restores what the
     /// sink derives from them (a grid's periodic copies). Writing in place spares a dense
     /// increment field the size of the grid.

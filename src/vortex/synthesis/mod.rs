@@ -65,13 +65,20 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
         return Ok(SynthesisReport::default());
     }
     // The increment is planned while the sink is read and added once it is lent.
-    let planned = match (sink.layout(), sink.vorticity()) {
-        (SinkLayout::Faces(lattice), SinkVorticity::Cells(vorticity)) => {
+    let planned = match sink.layout() {
+        SinkLayout::Faces(lattice) => {
+            let SinkVorticity::Cells(vorticity) = sink.vorticity(None) else {
+                return Err(mismatch());
+            };
             let images = Image::all(particles, &lattice);
             let sums = lattice::sums(particles, &images, &lattice, upsample, &vorticity);
             Planned::Faces(lattice, images, weights(&sums))
         }
-        (SinkLayout::Points(x), SinkVorticity::Points(vorticity)) => {
+        SinkLayout::Points(x) => {
+            let under = points::covered(particles, x);
+            let SinkVorticity::Points(vorticity) = sink.vorticity(Some(&under)) else {
+                return Err(mismatch());
+            };
             if vorticity.len() != x.len() {
                 return Err(VortexError::Layout(format!(
                     "{} vorticity samples for {} points",
@@ -82,7 +89,6 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
             let (report, dv) = points::synthesize(particles, x, &vorticity);
             Planned::Points(dv, report)
         }
-        _ => return Err(mismatch()),
     };
     match planned {
         Planned::Faces(lattice, images, report) => {

@@ -22,6 +22,23 @@ pub(super) fn synthesize(
     (report, v)
 }
 
+/// Which points lie under some particle's cut-off `sqrt(6) sigma`: the only points whose
+/// vorticity the Eq. 14 sums read.
+pub(super) fn covered(particles: &VortexParticles, points: &[Vec3]) -> Vec<bool> {
+    let reach = kernel::radius(max_sigma(particles));
+    let hash = PointHash::new(&particles.x, reach);
+    points
+        .par_iter()
+        .map(|x| {
+            let mut under = false;
+            hash.for_each_near(x, reach, |q| {
+                under |= (x - particles.x[q]).norm() < particles.radius(q);
+            });
+            under
+        })
+        .collect()
+}
+
 fn max_sigma(particles: &VortexParticles) -> Real {
     particles.sigma.iter().copied().fold(0.0, Real::max)
 }

@@ -86,7 +86,7 @@ pub fn synthesize<S: VelocitySink + ?Sized>(
                     x.len()
                 )));
             }
-            let (report, dv) = points::synthesize(particles, x, &vorticity);
+            let (report, dv) = points::synthesize(particles, x, &vorticity, &under);
             Planned::Points(dv, report)
         }
     };

@@ -9,15 +9,16 @@ use crate::spatial::PointHash;
 use crate::vortex::{kernel, VortexParticles};
 use crate::{Real, Vec3};
 
-/// The Eq. 14 weights and the velocity increment at every point.
+/// The Eq. 14 weights and the velocity increment at every point; `under` is [`covered`].
 pub(super) fn synthesize(
     particles: &VortexParticles,
     points: &[Vec3],
     vorticity: &[Vec3],
+    under: &[bool],
 ) -> (SynthesisReport, Vec<Vec3>) {
     let reach = kernel::velocity_radius(max_sigma(particles));
     let hash = PointHash::new(&particles.x, reach);
-    let report = weights(&sums(particles, &hash, reach, points, vorticity));
+    let report = weights(&sums(particles, &hash, reach, points, vorticity, under));
     let v = velocity(particles, &hash, reach, &report.weights, points);
     (report, v)
 }
@@ -43,21 +44,23 @@ fn max_sigma(particles: &VortexParticles) -> Real {
     particles.sigma.iter().copied().fold(0.0, Real::max)
 }
 
-/// Eq. 14 sums of every particle over the points under its cut-off.
+/// Eq. 14 sums of every particle over the points under its cut-off (those `under` some
+/// cut-off; the others add nothing).
 fn sums(
     particles: &VortexParticles,
     hash: &PointHash,
     reach: Real,
     points: &[Vec3],
     vorticity: &[Vec3],
+    under: &[bool],
 ) -> Vec<Sums> {
     let n = particles.len();
     // Blocks of points accumulate in parallel, and their sums are added in block order, a wave
     // of blocks at a time (so that the result does not depend on scheduling; see
     // `crate::parallel`).
-    let block_sums = |(xs, haves): (&[Vec3], &[Vec3])| {
+    let block_sums = |((xs, haves), unders): ((&[Vec3], &[Vec3]), &[bool])| {
         let (mut sums, mut near) = (vec![[0.0; 3]; n], Vec::new());
-        for (x, have) in xs.iter().zip(haves) {
+        for ((x, have), _) in xs.iter().zip(haves).zip(unders).filter(|(_, u)| **u) {
             near.clear();
             hash.for_each_near(x, reach, |q| {
                 if (x - particles.x[q]).norm() < kernel::velocity_radius(particles.sigma[q]) {
@@ -84,10 +87,12 @@ fn sums(
     };
     let mut total = vec![[0.0; 3]; n];
     let wave = POINTS_PER_BLOCK * BLOCKS_PER_WAVE;
-    for (xs, haves) in points.chunks(wave).zip(vorticity.chunks(wave)) {
+    let waves = points.chunks(wave).zip(vorticity.chunks(wave));
+    for ((xs, haves), unders) in waves.zip(under.chunks(wave)) {
         let blocks: Vec<Vec<Sums>> = xs
             .par_chunks(POINTS_PER_BLOCK)
             .zip(haves.par_chunks(POINTS_PER_BLOCK))
+            .zip(unders.par_chunks(POINTS_PER_BLOCK))
             .map(block_sums)
             .collect();
         for block in &blocks {

@@ -64,6 +64,18 @@ pub fn permute<T: Copy + Send + Sync>(data: &mut Vec<T>, perm: &[u32]) {
     *data = reordered;
 }
 
+/// Keeps the entries of `data` where `keep` holds, in order, then appends `added` copies of
+/// `value`: how per-particle state follows particles removed and spawned at open boundaries.
+/// A vector that does not hold one entry per particle (state not made yet) is left alone.
+pub fn resize<T: Clone>(data: &mut Vec<T>, keep: &[bool], added: usize, value: T) {
+    if data.len() != keep.len() {
+        return;
+    }
+    let mut k = keep.iter();
+    data.retain(|_| *k.next().expect("one flag per entry"));
+    data.extend(std::iter::repeat_n(value, added));
+}
+
 /// One non-empty cell: its coordinates and the range of sorted points inside it.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Cell {

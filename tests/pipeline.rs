@@ -204,6 +204,8 @@ fn solvers_build_from_parameters_alone() {
         limits: StepLimits::default(),
         domain: (Vec3::repeat(-5.0), Vec3::repeat(5.0)),
         container: false,
+        inflows: Vec::new(),
+        outflows: Vec::new(),
     };
     let mut sph = SphSolver::new(&params, Vec::new());
     let centre = |s: &SphSolver| s.fluid.x.iter().sum::<Vec3>() / s.fluid.len() as f64;

@@ -35,11 +35,11 @@
 
 use super::{add_scaled, Refiner, StepContext};
 use crate::sph::lanes::F4;
-use crate::sph::neighbors::permute;
+use crate::sph::neighbors::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
 use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -52,6 +52,9 @@ pub struct Mcvsph {
     theta: Real,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
+    /// The fraction sampled, and the generator that samples particles entering at an inflow.
+    fraction: Real,
+    rng: ChaCha8Rng,
     /// omega^n = curl v^n of the current step, packed (its Laplacian reads it at the
     /// neighbours of `reach`).
     omega: Field,
@@ -79,6 +82,8 @@ impl Mcvsph {
             volume_coefficient,
             theta,
             sampled,
+            fraction,
+            rng: ChaCha8Rng::seed_from_u64(seed ^ INFLOW_STREAM),
             omega: Field::default(),
             stretch: Vec::new(),
             reach: Vec::new(),
@@ -103,6 +108,9 @@ impl Mcvsph {
     }
 }
 
+/// Salt of the generator that samples entering particles, apart from the initial draw's.
+const INFLOW_STREAM: u64 = 0x1f10_u64;
+
 /// `count` distinct indices below `n`, uniformly at random from the seed.
 pub fn sample_indices(n: usize, count: usize, seed: u64) -> Vec<usize> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -112,6 +120,17 @@ pub fn sample_indices(n: usize, count: usize, seed: u64) -> Vec<usize> {
 impl Refiner for Mcvsph {
     fn permute(&mut self, perm: &[u32]) {
         permute(&mut self.sampled, perm);
+    }
+
+    /// Particles entering at an inflow carry a vortex particle with probability `fraction`,
+    /// so the sampled share of the fluid stays what the scene asked for.
+    fn resize(&mut self, keep: &[bool], added: usize) {
+        resize(&mut self.sampled, keep, 0, false);
+        let Self { rng, fraction, .. } = self;
+        let drawn: Vec<bool> = (0..added)
+            .map(|_| rng.random::<Real>() < *fraction)
+            .collect();
+        self.sampled.extend(drawn);
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

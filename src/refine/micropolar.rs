@@ -11,7 +11,7 @@
 //! (walls hold zero angular velocity). The rotational energy is sum_i m epsilon |omega_i|^2 / 2.
 
 use super::{Refiner, StepContext};
-use crate::sph::neighbors::permute;
+use crate::sph::neighbors::{permute, resize};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -37,6 +37,10 @@ impl Micropolar {
 impl Refiner for Micropolar {
     fn permute(&mut self, perm: &[u32]) {
         permute(&mut self.omega, perm);
+    }
+
+    fn resize(&mut self, keep: &[bool], added: usize) {
+        resize(&mut self.omega, keep, added, Vec3::zeros());
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], accel: &mut [Vec3]) {

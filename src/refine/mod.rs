@@ -34,6 +34,10 @@ pub trait Refiner: Send {
     /// the particle now at k).
     fn permute(&mut self, perm: &[u32]);
 
+    /// Drops the state of the particles where `keep` is false and appends state for `added`
+    /// new ones (fluid entering at an inflow, whose stream is irrotational: zero vorticity).
+    fn resize(&mut self, _keep: &[bool], _added: usize) {}
+
     /// At v^n (after the divergence solve, before non-pressure forces): may change the
     /// velocities `v` or add to the non-pressure accelerations `accel`.
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], accel: &mut [Vec3]);
@@ -110,6 +114,10 @@ impl StepHook for RefinementHook {
 
     fn permute(&mut self, perm: &[u32]) {
         self.refiner.permute(perm);
+    }
+
+    fn resize(&mut self, keep: &[bool], added: usize) {
+        self.refiner.resize(keep, added);
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], accel: &mut [Vec3]) {

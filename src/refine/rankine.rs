@@ -32,7 +32,7 @@
 
 use super::{Refiner, StepContext};
 use crate::sph::lanes::{CrossSum, F4};
-use crate::sph::neighbors::permute;
+use crate::sph::neighbors::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
 use crate::sph::packed::{Field, Packed, Quantity};
 use crate::{Real, Vec3};
@@ -72,6 +72,10 @@ impl Refiner for Rankine {
         if self.previous.len() == perm.len() {
             permute(&mut self.previous, perm);
         }
+    }
+
+    fn resize(&mut self, keep: &[bool], added: usize) {
+        resize(&mut self.previous, keep, added, Vec3::zeros());
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

@@ -37,7 +37,7 @@
 
 use super::{Refiner, StepContext};
 use crate::sph::lanes::F4;
-use crate::sph::neighbors::permute;
+use crate::sph::neighbors::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
 use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
@@ -79,6 +79,11 @@ impl Refiner for Vrsph {
             self.zeta.permute(perm);
             permute(&mut self.stretch, perm);
         }
+    }
+
+    fn resize(&mut self, keep: &[bool], added: usize) {
+        self.zeta.resize(keep, added);
+        resize(&mut self.stretch, keep, added, Vec3::zeros());
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

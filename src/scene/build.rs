@@ -45,6 +45,8 @@ pub fn sph_params(scene: &Scene) -> Option<SphParams> {
         limits: step_limits(scene),
         domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
         container: scene.container.is_some(),
+        inflows: fluid.inflow.clone(),
+        outflows: fluid.outflow.clone(),
     })
 }
 

@@ -5,6 +5,7 @@ pub mod build;
 pub mod error;
 pub mod grid;
 pub mod load;
+mod open;
 pub mod overrides;
 pub mod schema;
 pub mod turbulence;

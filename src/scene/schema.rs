@@ -123,6 +123,12 @@ pub struct Fluid {
     pub density: Real,
     /// Boxes filled with particles on a cubic lattice at `spacing`.
     pub blocks: Vec<FluidBlock>,
+    /// Inflow emitters on the domain's sides.
+    #[serde(default)]
+    pub inflow: Vec<crate::sph::Inflow>,
+    /// Outflow sides of the domain.
+    #[serde(default)]
+    pub outflow: Vec<crate::sph::Outflow>,
 }
 
 fn default_density() -> Real {

@@ -35,6 +35,12 @@ impl Scene {
                 GridSide::Inflow(v) => Some(norm(v)),
                 _ => None,
             })
+            .chain(
+                self.fluid
+                    .iter()
+                    .flat_map(|f| &f.inflow)
+                    .map(|f| norm(f.velocity)),
+            )
             .fold(0.0, Real::max);
         if inflow > 0.0 {
             return Some(inflow);

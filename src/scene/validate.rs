@@ -32,8 +32,12 @@ impl Scene {
                 Interval::le(extent / 4.0).note("a quarter of the smallest domain extent"),
             )?;
             c.num("fluid.density", fluid.density, Interval::gt(0.0))?;
-            if fluid.blocks.is_empty() {
-                return Err(c.invalid("fluid.blocks", "[]", "at least one block"));
+            if fluid.blocks.is_empty() && fluid.inflow.is_empty() {
+                return Err(c.invalid(
+                    "fluid.blocks",
+                    "[]",
+                    "at least one block, or an inflow to fill the domain",
+                ));
             }
             for (i, block) in fluid.blocks.iter().enumerate() {
                 let key = format!("fluid.blocks[{i}]");
@@ -50,6 +54,7 @@ impl Scene {
                 }
                 c.vec3(&format!("{key}.velocity"), block.velocity)?;
             }
+            fluid.validate_open(&c, &self.domain)?;
         }
         let bodies = self
             .container

@@ -1,7 +1,7 @@
 //! The fluid particles: structure-of-arrays state, lattice initialisation, reordering.
 
 use super::kernel::CubicSpline;
-use super::neighbors::permute;
+use super::neighbors::{permute, resize};
 use super::params::FluidBlock;
 use crate::{Real, Vec3};
 
@@ -99,6 +99,24 @@ impl FluidParticles {
         permute(&mut self.kappa_v, perm);
         for (_, field) in &mut self.carried {
             permute(field, perm);
+        }
+    }
+
+    /// Removes the particles where `keep` is false, then appends the `added` particles
+    /// (position, velocity), at rest density with no pressure, warm start or carried values:
+    /// the one place open boundaries change the count, so no per-particle array is forgotten.
+    pub fn exchange(&mut self, keep: &[bool], added: &[(Vec3, Vec3)]) {
+        let n = added.len();
+        resize(&mut self.x, keep, 0, Vec3::zeros());
+        resize(&mut self.v, keep, 0, Vec3::zeros());
+        self.x.extend(added.iter().map(|a| a.0));
+        self.v.extend(added.iter().map(|a| a.1));
+        resize(&mut self.density, keep, n, self.rest_density);
+        resize(&mut self.pressure, keep, n, 0.0);
+        resize(&mut self.kappa, keep, n, 0.0);
+        resize(&mut self.kappa_v, keep, n, 0.0);
+        for (_, field) in &mut self.carried {
+            resize(field, keep, n, Vec3::zeros());
         }
     }
 

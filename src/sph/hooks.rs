@@ -43,6 +43,10 @@ pub trait StepHook: Send {
     /// the particle now at k).
     fn permute(&mut self, _perm: &[u32]) {}
 
+    /// Drops the state of the particles where `keep` is false and appends state for `added`
+    /// new ones, as the fluid did at its open boundaries (see [`crate::spatial::resize`]).
+    fn resize(&mut self, _keep: &[bool], _added: usize) {}
+
     /// At v^n (after the divergence solve, before non-pressure forces): may change the
     /// velocities `v` or add to the non-pressure accelerations `accel`.
     fn before_advection(&mut self, _ctx: &StepContext, _v: &mut [Vec3], _accel: &mut [Vec3]) {}

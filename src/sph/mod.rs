@@ -11,6 +11,7 @@ pub mod kernel;
 pub mod lanes;
 pub mod neighborhood;
 pub mod neighbors;
+pub mod open;
 pub mod operators;
 pub mod packed;
 pub mod pair_cache;
@@ -23,5 +24,7 @@ pub use hooks::{StepContext, StepHook};
 pub use kernel::CubicSpline;
 pub use neighborhood::Neighborhood;
 pub use neighbors::{CellGrid, NeighborLists};
-pub use params::{FluidBlock, Pressure, PressureSolverKind, SphParams, Viscosity};
+pub use params::{
+    DomainSide, FluidBlock, Inflow, Outflow, Pressure, PressureSolverKind, SphParams, Viscosity,
+};
 pub use solver::{Instability, SphSolver, StepStats};

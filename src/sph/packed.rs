@@ -58,6 +58,13 @@ impl Field {
     pub fn permute(&mut self, perm: &[u32]) {
         super::neighbors::permute(&mut self.0, perm);
     }
+
+    /// Follows the fluid's open boundaries (see [`crate::spatial::resize`]): new particles
+    /// hold zero.
+    pub fn resize(&mut self, keep: &[bool], added: usize) {
+        let zero = F4::from_vec(&Vec3::zeros(), 0.0);
+        super::neighbors::resize(&mut self.0, keep, added, zero);
+    }
 }
 
 /// Sets `out` to `f(i)` for i < n, in parallel, keeping its allocation. The refinements keep

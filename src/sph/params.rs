@@ -25,6 +25,89 @@ pub struct SphParams {
     pub domain: (Vec3, Vec3),
     /// The first body is a container (fluid is kept inside it, not outside).
     pub container: bool,
+    /// Inflow emitters on the domain's sides.
+    pub inflows: Vec<Inflow>,
+    /// Outflow sides of the domain: particles crossing them are removed.
+    pub outflows: Vec<Outflow>,
+}
+
+/// A side of the domain box.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DomainSide {
+    XMin,
+    XMax,
+    YMin,
+    YMax,
+    ZMin,
+    ZMax,
+}
+
+impl DomainSide {
+    /// The axis the side is normal to.
+    pub fn axis(self) -> usize {
+        match self {
+            Self::XMin | Self::XMax => 0,
+            Self::YMin | Self::YMax => 1,
+            Self::ZMin | Self::ZMax => 2,
+        }
+    }
+
+    /// Whether it is the upper side of its axis.
+    pub fn is_max(self) -> bool {
+        matches!(self, Self::XMax | Self::YMax | Self::ZMax)
+    }
+
+    /// The unit normal pointing into the domain.
+    pub fn inward(self) -> Vec3 {
+        let mut n = Vec3::zeros();
+        n[self.axis()] = if self.is_max() { -1.0 } else { 1.0 };
+        n
+    }
+
+    /// The two axes along the side, in order.
+    pub fn tangents(self) -> [usize; 2] {
+        match self.axis() {
+            0 => [1, 2],
+            1 => [0, 2],
+            _ => [0, 1],
+        }
+    }
+
+    /// Its name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::XMin => "x_min",
+            Self::XMax => "x_max",
+            Self::YMin => "y_min",
+            Self::YMax => "y_max",
+            Self::ZMin => "z_min",
+            Self::ZMax => "z_max",
+        }
+    }
+}
+
+/// An inflow emitter: a rectangle on a side of the domain through which fluid enters at a
+/// prescribed velocity (see `super::open`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Inflow {
+    /// The domain side it sits on.
+    pub side: DomainSide,
+    /// Lower corner of the rectangle in the side's two other coordinates, in axis order, m.
+    pub min: [Real; 2],
+    /// Upper corner, m.
+    pub max: [Real; 2],
+    /// Velocity of the entering fluid, m/s; its component into the domain must be positive.
+    pub velocity: [Real; 3],
+}
+
+/// An outflow side: particles that cross it leave the simulation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Outflow {
+    /// The domain side.
+    pub side: DomainSide,
 }
 
 /// A box of fluid.

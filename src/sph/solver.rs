@@ -17,6 +17,7 @@ use super::iisph;
 use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order, CellGrid, NeighborLists};
+use super::open::OpenBoundaries;
 use super::operators::{self, Operators, WallField};
 use super::pair_cache::{Densities, PairCache};
 use super::params::{PressureSolverKind, SphParams};
@@ -105,6 +106,8 @@ pub struct SphSolver {
     /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
     /// them).
     ran: Vec<&'static str>,
+    /// Inflow emitters and outflow sides.
+    open: OpenBoundaries,
 }
 
 impl SphSolver {
@@ -130,13 +133,21 @@ impl SphSolver {
             super::walls::wall_distance(&bodies, params.container, 0.0, &crate::Point3::from(*x))
                 >= spacing
         };
-        let fluid = FluidParticles::from_blocks(
+        let mut fluid = FluidParticles::from_blocks(
             &params.blocks,
             spacing,
             params.rest_density,
             &kernel,
             keep,
         );
+        let mut open = OpenBoundaries::new(
+            &params.inflows,
+            &params.outflows,
+            params.domain,
+            spacing,
+            keep,
+        );
+        open.prime(&mut fluid);
         let boundary = BoundaryParticles::sample(&bodies, spacing, &kernel, 0.0);
         let n = fluid.len();
         let mut me = Self {
@@ -159,6 +170,7 @@ impl SphSolver {
             hooks: hooks(n),
             refine_volume: Vec::new(),
             ran: Vec::new(),
+            open,
         };
         me.update_neighborhoods();
         me
@@ -319,6 +331,7 @@ impl SphSolver {
             max_iterations: settings.max_iterations,
         };
         stats.dt = dt;
+        self.open.impose(x, v);
         // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
         // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
         // before the end time are up to halved), so carry kappa over.
@@ -400,6 +413,7 @@ impl SphSolver {
             }
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
+        self.open.impose(x, v);
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
         pressure
             .par_iter_mut()
@@ -409,6 +423,14 @@ impl SphSolver {
             .zip(v.par_iter())
             .for_each(|(x, v)| *x += dt * v);
         ran.push("advect");
+        if !self.open.is_empty() {
+            if let Some(change) = self.open.exchange(&mut self.fluid, dt) {
+                for hook in &mut self.hooks {
+                    hook.resize(&change.keep, change.added);
+                }
+            }
+            ran.push("open boundaries");
+        }
         self.time += dt;
         self.step += 1;
         self.check()?;
@@ -469,6 +491,15 @@ impl SphSolver {
             ),
         ));
         out.push(("advect", "positions, then NaN and domain checks".into()));
+        if !self.open.is_empty() {
+            out.push((
+                "open boundaries",
+                format!(
+                    "{}; inflow buffers move at their velocity through the solves",
+                    self.open.describe()
+                ),
+            ));
+        }
         out
     }
 

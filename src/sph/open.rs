@@ -1,0 +1,240 @@
+//! Open boundaries of the SPH fluid: inflow emitters and outflow sides of the domain.
+//!
+//! **Inflow: a buffer zone.** The fluid particles within [`BUFFER_LAYERS`] spacings of the side,
+//! inside the emitter's rectangle, move with the prescribed velocity: it is set before the step's
+//! solves and again after the pressure solve, so the solves see the buffer as moving boundary
+//! data and no pressure pushes it back. The fluid beyond the buffer has a full kernel support of
+//! buffer particles behind it (the support is two spacings): they are its boundary samples, so
+//! the inflow neither leaks back nor sees a free surface. The buffer is fed with lattice layers
+//! on the side: a new layer each time the last one has moved a spacing in, so particles enter
+//! at the rate `u_n A / h^3` the velocity implies. This is the buffer-layer inlet SPlisHSPlasH's
+//! emitters also use (particles in the emitter box move kinematically); the alternative,
+//! mirrored ghost particles, needs a pressure boundary condition DFSPH does not have.
+//!
+//! **Outflow: removal at the plane.** A particle that crosses the side's plane is removed. Ahead
+//! of the plane the fluid thins as at a free surface: pressure is clamped at zero there, so it
+//! neither sucks the fluid nor sends a wave back when a particle goes (the p = 0 outflow of a
+//! grid's open side).
+
+use rayon::prelude::*;
+
+use super::fluid::FluidParticles;
+use super::params::{Inflow, Outflow};
+use crate::{Real, Vec3};
+
+/// Depth of an inflow's buffer, in spacings: one more than the kernel support.
+pub const BUFFER_LAYERS: Real = 3.0;
+
+/// One emitter and the offset of the layer it spawned last.
+#[derive(Debug, Clone)]
+struct Emitter {
+    inflow: Inflow,
+    /// The side's coordinate along its axis, m.
+    plane: Real,
+    /// Distance from the plane of the last layer spawned, m.
+    last: Real,
+    /// The layer's sites on the plane (the normal coordinate is set when spawning).
+    sites: Vec<Vec3>,
+}
+
+impl Emitter {
+    fn velocity(&self) -> Vec3 {
+        Vec3::from(self.inflow.velocity)
+    }
+
+    /// Speed into the domain, m/s.
+    fn inward_speed(&self) -> Real {
+        self.velocity().dot(&self.inflow.side.inward())
+    }
+
+    /// Distance of `x` from the plane into the domain, if it lies over the rectangle.
+    fn depth(&self, x: &Vec3) -> Option<Real> {
+        let side = self.inflow.side;
+        let [a, b] = side.tangents();
+        let (min, max) = (self.inflow.min, self.inflow.max);
+        let over = x[a] >= min[0] && x[a] <= max[0] && x[b] >= min[1] && x[b] <= max[1];
+        over.then(|| (x[side.axis()] - self.plane) * side.inward()[side.axis()])
+    }
+
+    /// The layer at `depth` from the plane.
+    fn layer(&self, depth: Real) -> impl Iterator<Item = (Vec3, Vec3)> + '_ {
+        let (axis, v) = (self.inflow.side.axis(), self.velocity());
+        let x = self.plane + depth * self.inflow.side.inward()[axis];
+        self.sites.iter().map(move |s| {
+            let mut p = *s;
+            p[axis] = x;
+            (p, v)
+        })
+    }
+}
+
+/// The open boundaries of one fluid.
+#[derive(Debug, Clone, Default)]
+pub struct OpenBoundaries {
+    emitters: Vec<Emitter>,
+    outflows: Vec<(Outflow, Real)>,
+    spacing: Real,
+}
+
+/// What one exchange did: which particles were kept and how many were added after them.
+pub struct Exchange {
+    pub keep: Vec<bool>,
+    pub added: usize,
+}
+
+impl OpenBoundaries {
+    /// The boundaries of a fluid at `spacing` in the domain `(lo, hi)`; an emitter's lattice
+    /// sites are those for which `keep` holds half a spacing in (the solver's rule for fluid
+    /// sites: clear of walls and obstacles). The scene checked that each rectangle lies on its
+    /// side and each velocity points in.
+    pub fn new(
+        inflows: &[Inflow],
+        outflows: &[Outflow],
+        domain: (Vec3, Vec3),
+        spacing: Real,
+        keep: impl Fn(&Vec3) -> bool,
+    ) -> Self {
+        let plane = |axis: usize, max: bool| if max { domain.1[axis] } else { domain.0[axis] };
+        let emitters = inflows
+            .iter()
+            .map(|inflow| {
+                let side = inflow.side;
+                let [a, b] = side.tangents();
+                let count = |k: usize| {
+                    ((inflow.max[k] - inflow.min[k]) / spacing + 1e-9)
+                        .floor()
+                        .max(0.0) as usize
+                };
+                let mut e = Emitter {
+                    inflow: inflow.clone(),
+                    plane: plane(side.axis(), side.is_max()),
+                    last: Real::INFINITY,
+                    sites: Vec::new(),
+                };
+                for j in 0..count(1) {
+                    for i in 0..count(0) {
+                        let mut s = Vec3::zeros();
+                        s[a] = inflow.min[0] + (i as Real + 0.5) * spacing;
+                        s[b] = inflow.min[1] + (j as Real + 0.5) * spacing;
+                        e.sites.push(s);
+                    }
+                }
+                let first: Vec<Vec3> = e.layer(0.5 * spacing).map(|(x, _)| x).collect();
+                let mut at = first.iter();
+                e.sites
+                    .retain(|_| keep(at.next().expect("one position per site")));
+                e
+            })
+            .collect();
+        let outflows = outflows
+            .iter()
+            .map(|o| (o.clone(), plane(o.side.axis(), o.side.is_max())))
+            .collect();
+        Self {
+            emitters,
+            outflows,
+            spacing,
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.emitters.is_empty() && self.outflows.is_empty()
+    }
+
+    /// Before the first step: each emitter continues the lattice of the fluid already over its
+    /// rectangle (the layer nearest the plane within a spacing), or spawns its first layer half
+    /// a spacing in.
+    pub fn prime(&mut self, fluid: &mut FluidParticles) {
+        let h = self.spacing;
+        let mut added = Vec::new();
+        for e in &mut self.emitters {
+            e.last = fluid
+                .x
+                .iter()
+                .filter_map(|x| e.depth(x))
+                .filter(|d| (0.0..h).contains(d))
+                .fold(Real::INFINITY, Real::min);
+            if e.last.is_infinite() {
+                e.last = 0.5 * h;
+                added.extend(e.layer(e.last));
+            }
+        }
+        if !added.is_empty() {
+            fluid.exchange(&vec![true; fluid.len()], &added);
+        }
+    }
+
+    /// Sets the velocity of every particle in an inflow's buffer to the inflow's.
+    pub fn impose(&self, x: &[Vec3], v: &mut [Vec3]) {
+        if self.emitters.is_empty() {
+            return;
+        }
+        let depth = BUFFER_LAYERS * self.spacing;
+        x.par_iter().zip(v.par_iter_mut()).for_each(|(x, v)| {
+            for e in &self.emitters {
+                if e.depth(x).is_some_and(|d| d < depth) {
+                    *v = e.velocity();
+                }
+            }
+        });
+    }
+
+    /// After the positions moved by `dt`: removes the particles beyond an outflow plane and
+    /// spawns the inflow layers that are due. None when nothing changed.
+    pub fn exchange(&mut self, fluid: &mut FluidParticles, dt: Real) -> Option<Exchange> {
+        if self.is_empty() {
+            return None;
+        }
+        let h = self.spacing;
+        let mut added = Vec::new();
+        for e in &mut self.emitters {
+            e.last += e.inward_speed() * dt;
+            while e.last >= 1.5 * h {
+                e.last -= h;
+                added.extend(e.layer(e.last));
+            }
+        }
+        let keep: Vec<bool> = fluid
+            .x
+            .par_iter()
+            .map(|x| {
+                self.outflows.iter().all(|(o, plane)| {
+                    let axis = o.side.axis();
+                    (x[axis] - plane) * o.side.inward()[axis] >= 0.0
+                })
+            })
+            .collect();
+        let removed = keep.iter().any(|k| !k);
+        if !removed && added.is_empty() {
+            return None;
+        }
+        fluid.exchange(&keep, &added);
+        Some(Exchange {
+            keep,
+            added: added.len(),
+        })
+    }
+
+    /// One line for the plan.
+    pub fn describe(&self) -> String {
+        let mut parts: Vec<String> = self
+            .emitters
+            .iter()
+            .map(|e| {
+                format!(
+                    "inflow on {} at {:?} m/s ({} sites a layer, buffer {BUFFER_LAYERS} spacings)",
+                    e.inflow.side.name(),
+                    e.inflow.velocity,
+                    e.sites.len()
+                )
+            })
+            .collect();
+        parts.extend(
+            self.outflows
+                .iter()
+                .map(|(o, _)| format!("outflow on {}", o.side.name())),
+        );
+        parts.join(", ")
+    }
+}

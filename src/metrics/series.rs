@@ -64,10 +64,13 @@ impl MetricsRecorder {
                 Metric::DensityErrorAvg => density_errors().0,
                 Metric::DensityErrorMax => density_errors().1,
                 Metric::MaxSpeed => super::max_speed(&fluid.v),
+                Metric::Particles => fluid.len() as Real,
                 // Filled in from the step's statistics in `write`.
                 Metric::PressureIterations
                 | Metric::DivergenceIterations
-                | Metric::RefinementSeconds => 0.0,
+                | Metric::RefinementSeconds
+                | Metric::OpenBoundarySeconds
+                | Metric::StepSeconds => 0.0,
             })
             .collect();
         StateMetrics { values }
@@ -90,6 +93,8 @@ impl MetricsRecorder {
                 Metric::PressureIterations => stats.pressure.iterations as Real,
                 Metric::DivergenceIterations => stats.divergence.iterations as Real,
                 Metric::RefinementSeconds => stats.refinement_seconds,
+                Metric::OpenBoundarySeconds => stats.open_seconds,
+                Metric::StepSeconds => stats.step_seconds,
                 _ => *v,
             });
         }

@@ -92,11 +92,17 @@ pub enum Metric {
     Enstrophy,
     /// Wall-clock time of the refinement in the step, s.
     RefinementSeconds,
+    /// Fluid particles at the start of the step (open boundaries change it).
+    Particles,
+    /// Wall-clock time of the open boundaries in the step (buffers, removal, spawning), s.
+    OpenBoundarySeconds,
+    /// Wall-clock time of the whole SPH step (solves, hooks, forces, positions), s.
+    StepSeconds,
 }
 
 impl Metric {
     /// Every metric, in column order.
-    pub const ALL: [Metric; 13] = [
+    pub const ALL: [Metric; 16] = [
         Metric::KineticEnergy,
         Metric::PotentialEnergy,
         Metric::DensityErrorAvg,
@@ -110,6 +116,9 @@ impl Metric {
         Metric::VorticityMax,
         Metric::Enstrophy,
         Metric::RefinementSeconds,
+        Metric::Particles,
+        Metric::OpenBoundarySeconds,
+        Metric::StepSeconds,
     ];
     /// Column name in `metrics.csv`.
     pub fn column(self) -> &'static str {
@@ -127,6 +136,9 @@ impl Metric {
             Metric::VorticityMax => "vorticity_max",
             Metric::Enstrophy => "enstrophy",
             Metric::RefinementSeconds => "refinement_seconds",
+            Metric::Particles => "particles",
+            Metric::OpenBoundarySeconds => "open_boundary_seconds",
+            Metric::StepSeconds => "step_seconds",
         }
     }
 }

@@ -72,6 +72,10 @@ pub struct StepStats {
     pub divergence_seconds: Real,
     /// Wall-clock seconds spent in the pressure (density) solve.
     pub pressure_seconds: Real,
+    /// Wall-clock seconds spent in the open boundaries.
+    pub open_seconds: Real,
+    /// Wall-clock seconds of the whole step.
+    pub step_seconds: Real,
 }
 
 /// The SPH fluid, its boundary samples, and the settings that drive it.
@@ -299,6 +303,7 @@ impl SphSolver {
             Some(accel) => accel,
             None => self.non_pressure_accelerations(),
         };
+        let step_start = Instant::now();
         let mut stats = StepStats::default();
         let ran = &mut self.ran;
         ran.clear();
@@ -331,7 +336,9 @@ impl SphSolver {
             max_iterations: settings.max_iterations,
         };
         stats.dt = dt;
+        let start = Instant::now();
         self.open.impose(x, v);
+        stats.open_seconds = start.elapsed().as_secs_f64();
         // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
         // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
         // before the end time are up to halved), so carry kappa over.
@@ -413,7 +420,9 @@ impl SphSolver {
             }
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
+        let start = Instant::now();
         self.open.impose(x, v);
+        stats.open_seconds += start.elapsed().as_secs_f64();
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
         pressure
             .par_iter_mut()
@@ -424,13 +433,16 @@ impl SphSolver {
             .for_each(|(x, v)| *x += dt * v);
         ran.push("advect");
         if !self.open.is_empty() {
+            let start = Instant::now();
             if let Some(change) = self.open.exchange(&mut self.fluid, dt) {
                 for hook in &mut self.hooks {
                     hook.resize(&change.keep, change.added);
                 }
             }
+            stats.open_seconds += start.elapsed().as_secs_f64();
             ran.push("open boundaries");
         }
+        stats.step_seconds = step_start.elapsed().as_secs_f64();
         self.time += dt;
         self.step += 1;
         self.check()?;

@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use eddy::abl::AblDatabase;
 use eddy::grid::walls::{boundary_cells, wall_distance};
@@ -64,15 +64,8 @@ position = [{}, {}, {}]
 
 const CENTRE: [Real; 3] = [0.9, 0.75, 0.75];
 
-fn database(dir: &Path) -> std::path::PathBuf {
-    let path = dir.join("ball.h5");
-    let _serial = common::hdf5_or_child();
-    common::sphere_database(&path, RADIUS, 400, 4.0);
-    path
-}
-
-fn abl_line(db: &Path) -> String {
-    format!("abl = {{ database = {:?} }}", db.display().to_string())
+fn database(dir: &Path) -> PathBuf {
+    common::ball_database(dir, RADIUS)
 }
 
 fn scene(text: &str) -> Result<Scene, String> {
@@ -80,9 +73,7 @@ fn scene(text: &str) -> Result<Scene, String> {
 }
 
 fn built(text: &str) -> Pipeline {
-    let scene = scene(text).expect("the scene loads");
-    let _serial = common::hdf5_or_child();
-    Pipeline::build(&scene).expect("the pipeline builds")
+    common::built(text, "abl_test.toml")
 }
 
 /// With c_p = 0 nothing is seeded, so the turbulence stages leave the flow alone: velocity and
@@ -93,8 +84,16 @@ fn without_seeding_the_run_is_the_plain_grid_bit_for_bit() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
     let mut plain = built(&text(CENTRE, "", ""));
-    let mut quiet = built(&text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 0.0"));
-    let mut seeded = built(&text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 1e4"));
+    let mut quiet = built(&text(
+        CENTRE,
+        &common::abl_line(&db),
+        "[turbulence]\nc_p = 0.0",
+    ));
+    let mut seeded = built(&text(
+        CENTRE,
+        &common::abl_line(&db),
+        "[turbulence]\nc_p = 1e4",
+    ));
     for _ in 0..8 {
         plain.step(None, None).expect("steps");
         quiet.step(None, None).expect("steps");
@@ -130,15 +129,19 @@ fn the_wall_layer_is_the_lookup_for_the_relative_motion() {
         let _serial = common::hdf5_or_child();
         AblDatabase::open(&db_path, Some(&Shape::Sphere { radius: RADIUS })).expect("opens")
     };
-    let stream = text(CENTRE, &abl_line(&db_path), "[turbulence]\nc_p = 0.0");
+    let stream = text(
+        CENTRE,
+        &common::abl_line(&db_path),
+        "[turbulence]\nc_p = 0.0",
+    );
     let still = stream
         .replace(&format!("x_min = {{ inflow = [{U}, 0.0, 0.0] }}"), "")
         .replace(&format!("initial_velocity = [{U}, 0.0, 0.0]"), "")
         .replace(
-            &abl_line(&db_path),
+            &common::abl_line(&db_path),
             &format!(
                 "{}\nmotion = {{ linear = [0.0, 0.6, 0.8] }}",
-                abl_line(&db_path)
+                common::abl_line(&db_path)
             ),
         );
     for (scene_text, relative) in [
@@ -183,7 +186,7 @@ fn an_abl_blob_moves_with_the_stream() {
     // The sphere low in a corner, the blob high across from it; no seeding, no wall layer.
     let mut p = built(&text(
         [0.4, 0.35, 0.35],
-        &abl_line(&db),
+        &common::abl_line(&db),
         "[turbulence]\nc_p = 0.0\ngain = 0.0",
     ));
     let dx = p.sim.grid.as_ref().unwrap().mac.dx;
@@ -227,7 +230,7 @@ fn an_abl_blob_moves_with_the_stream() {
 fn the_mixing_length_is_the_distance_to_the_nearest_wall() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let p = built(&text(CENTRE, &abl_line(&db), ""));
+    let p = built(&text(CENTRE, &common::abl_line(&db), ""));
     let grid = p.sim.grid.as_ref().unwrap();
     let d = wall_distance(grid);
     let c = Vec3::from(CENTRE);
@@ -249,14 +252,14 @@ fn the_mixing_length_is_the_distance_to_the_nearest_wall() {
 fn bad_databases_and_turbulence_values_are_refused_clearly() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let abl = abl_line(&db);
+    let abl = common::abl_line(&db);
     let refused = |text: &str, needles: &[&str]| {
         let e = scene(text).expect_err("refused");
         for n in needles {
             assert!(e.contains(n), "{e:?} does not name {n:?}");
         }
     };
-    let missing = abl_line(&dir.path().join("none.h5"));
+    let missing = common::abl_line(&dir.path().join("none.h5"));
     refused(
         &text(CENTRE, &missing, ""),
         &["obstacles[0].abl.database", "none.h5", "eddy-precompute"],
@@ -312,7 +315,7 @@ fn bad_databases_and_turbulence_values_are_refused_clearly() {
 fn abl_is_refused_on_the_container() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let body = text(CENTRE, &abl_line(&db), "");
+    let body = text(CENTRE, &common::abl_line(&db), "");
     let container = body.replacen("[[obstacles]]", "[container]", 1);
     let e = scene(&container).expect_err("refused");
     assert!(e.contains("container.abl"), "{e}");
@@ -326,7 +329,7 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
     let file = dir.path().join("abl.toml");
-    let body = text(CENTRE, &abl_line(&db), "[turbulence]\nc_p = 1e4")
+    let body = text(CENTRE, &common::abl_line(&db), "[turbulence]\nc_p = 1e4")
         .replace("vtk = false", "vtk = true\nhdf5 = true\ninterval = 0.05");
     std::fs::write(&file, body).expect("writes the scene");
     let out = dir.path().join("out");

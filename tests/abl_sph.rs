@@ -63,14 +63,7 @@ motion = {{ linear = [{SPEED}, 0.0, 0.0] }}
 }
 
 fn database(dir: &Path) -> PathBuf {
-    let path = dir.join("ball.h5");
-    let _serial = common::hdf5_or_child();
-    common::sphere_database(&path, RADIUS, 400, 4.0);
-    path
-}
-
-fn abl_line(db: &Path) -> String {
-    format!("abl = {{ database = {:?} }}", db.display().to_string())
+    common::ball_database(dir, RADIUS)
 }
 
 fn scene(text: &str) -> Result<Scene, String> {
@@ -78,8 +71,7 @@ fn scene(text: &str) -> Result<Scene, String> {
 }
 
 fn built(text: &str) -> Pipeline {
-    let scene = scene(text).expect("the scene loads");
-    Pipeline::build(&scene).expect("the pipeline builds")
+    common::built(text, "abl_sph_test.toml")
 }
 
 fn sph(p: &Pipeline) -> &SphSolver {
@@ -124,7 +116,7 @@ fn without_seeding_the_run_is_the_plain_sph_bit_for_bit() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
     let mut plain = built(&text("", ""));
-    let mut quiet = built(&text(&abl_line(&db), "[turbulence]\nc_p = 0.0"));
+    let mut quiet = built(&text(&common::abl_line(&db), "[turbulence]\nc_p = 0.0"));
     for _ in 0..6 {
         plain.step(None, None).expect("steps");
         quiet.step(None, None).expect("steps");
@@ -147,7 +139,7 @@ fn without_seeding_the_run_is_the_plain_sph_bit_for_bit() {
 fn the_particles_carry_the_lookup_unchanged() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let mut p = built(&text(&abl_line(&db), "[turbulence]\nc_p = 0.0"));
+    let mut p = built(&text(&common::abl_line(&db), "[turbulence]\nc_p = 0.0"));
     tag(&mut p);
     let before = by_tag(&p);
     let layer = {
@@ -240,7 +232,7 @@ fn the_seeding_routine_is_shared_and_conserves_vorticity() {
     // Particles: the fluid of the tank, those within 0.1 m of the floor.
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let p = built(&text(&abl_line(&db), ""));
+    let p = built(&text(&common::abl_line(&db), ""));
     let s = sph(&p);
     let mut particles = SeedSamples::default();
     for (i, x) in s.fluid.x.iter().enumerate() {
@@ -284,7 +276,7 @@ resolution = [20, 20, 20]
 fn vortex_kernels_stay_inside_the_liquid() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let p = built(&text(&abl_line(&db), ""));
+    let p = built(&text(&common::abl_line(&db), ""));
     let s = sph(&p);
     let top = s.fluid.x.iter().map(|x| x.y).fold(0.0, Real::max);
     let reach = 6.0 * H;
@@ -321,7 +313,7 @@ fn vortex_kernels_stay_inside_the_liquid() {
     // clear of the free surface and walls as they were when the stage ran (at the step's
     // start: the fluid moves after it).
     let mut p = built(&text(
-        &abl_line(&db),
+        &common::abl_line(&db),
         "[turbulence]\nc_p = 1e3\nr_max = 4.0\ndissipation_radius = 1.0",
     ));
     let mut seen = 0;
@@ -368,7 +360,7 @@ fn it_composes_with_a_refinement() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
     let mut p = built(&text(
-        &abl_line(&db),
+        &common::abl_line(&db),
         "[turbulence]\nc_p = 1e3\n[refinement]\nmethod = \"vrsph\"",
     ));
     let names: Vec<&str> = p.stages.iter().map(|s| s.name()).collect();
@@ -389,7 +381,8 @@ fn it_composes_with_a_refinement() {
 fn a_database_for_another_obstacle_is_refused() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let other = text(&abl_line(&db), "").replace(&format!("radius = {RADIUS}"), "radius = 0.1");
+    let other =
+        text(&common::abl_line(&db), "").replace(&format!("radius = {RADIUS}"), "radius = 0.1");
     let scene = scene(&other).expect("loads");
     let e = Pipeline::build(&scene).err().expect("refused").to_string();
     let fp = |r: Real| eddy::abl::geometry_fingerprint(&Shape::Sphere { radius: r }).unwrap();

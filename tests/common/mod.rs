@@ -73,3 +73,29 @@ pub fn sphere_database(path: &std::path::Path, radius: f64, points: usize, gain:
     .write(path)
     .expect("writes the database");
 }
+
+/// [`sphere_database`] of `radius` with 400 points and gain 4 as `DIR/ball.h5`, written under
+/// the HDF5 guard.
+#[allow(dead_code)]
+pub fn ball_database(dir: &std::path::Path, radius: f64) -> std::path::PathBuf {
+    let path = dir.join("ball.h5");
+    let _serial = hdf5_or_child();
+    sphere_database(&path, radius, 400, 4.0);
+    path
+}
+
+/// The `abl = { database = ... }` line of an obstacle naming `db`.
+#[allow(dead_code)]
+pub fn abl_line(db: &std::path::Path) -> String {
+    format!("abl = {{ database = {:?} }}", db.display().to_string())
+}
+
+/// The pipeline of a scene given as text (`name` is the file it reports), built under the
+/// HDF5 guard (it opens databases).
+#[allow(dead_code)]
+pub fn built(text: &str, name: &str) -> eddy::pipeline::Pipeline {
+    let scene =
+        eddy::scene::parse_str(text, std::path::Path::new(name), &[]).expect("the scene loads");
+    let _serial = hdf5_or_child();
+    eddy::pipeline::Pipeline::build(&scene).expect("the pipeline builds")
+}

@@ -64,6 +64,10 @@ pub struct TurbulenceParams {
     /// `abl` or `random`.
     #[serde(default)]
     pub seeding: Seeding,
+    /// Synthesis lattice per grid cell per axis, 1 or 2 (Table 1, section 5.2: the kernels
+    /// are evaluated on a grid this much finer and averaged over each face). Grid scenes only.
+    #[serde(default = "d_upsample")]
+    pub upsample: usize,
 }
 
 fn d_c_p() -> Real {
@@ -83,6 +87,9 @@ fn d_split() -> Real {
 }
 fn d_children() -> usize {
     2
+}
+fn d_upsample() -> usize {
+    1
 }
 
 impl Default for TurbulenceParams {

@@ -82,6 +82,14 @@ impl Scene {
                 ));
             }
             check_params(c, t)?;
+            if t.upsample != 1 && self.grid.is_none() {
+                return Err(c.invalid(
+                    "turbulence.upsample",
+                    t.upsample,
+                    "1 in a scene without [grid]: SPH particles receive the kernels' velocity \
+                     at their own positions",
+                ));
+            }
         }
         if with_abl > 0 && self.turbulence_u0().is_none() {
             return Err(c.invalid(
@@ -122,6 +130,13 @@ fn check_params(c: &Checker, t: &TurbulenceParams) -> Result<(), SceneError> {
         t.cascade_time,
         Interval::ge(0.0).note("s/m^(2/3)"),
     )?;
+    if !(1..=2).contains(&t.upsample) {
+        return Err(c.invalid(
+            "turbulence.upsample",
+            t.upsample,
+            "1 or 2 (Pfaff et al. 2009, Table 1)",
+        ));
+    }
     if !(2..=MAX_CHILDREN).contains(&t.children) {
         return Err(c.invalid(
             "turbulence.children",

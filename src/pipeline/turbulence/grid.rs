@@ -208,7 +208,13 @@ impl Stage for GridTurbulence {
                 ),
                 (PARTS[2], seeding),
                 (PARTS[3], dynamics),
-                (PARTS[4], "Eq. 14 weights onto the grid's faces".into()),
+                (
+                    PARTS[4],
+                    format!(
+                        "Eq. 14 weights onto the grid's faces, on a lattice {}x finer",
+                        self.common.settings.params.upsample
+                    ),
+                ),
             ],
         )
     }
@@ -249,7 +255,11 @@ impl Stage for GridTurbulence {
         stats.merged = report.merged;
         stats.dissipated = report.dissipated;
         laps.lap(3);
-        synthesize(&state.vortices, &mut grid.mac, 1)?;
+        synthesize(
+            &state.vortices,
+            &mut grid.mac,
+            self.common.settings.params.upsample,
+        )?;
         laps.lap(4);
         stats.seconds = laps.seconds;
         stats.particles = state.vortices.len();

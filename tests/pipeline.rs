@@ -142,6 +142,45 @@ fn grid_and_fluid_share_one_clock() {
 
 /// The layering rules of DESIGN.md: no part names the scene in its code, and neither the vortex
 /// layer nor the boundary layer's seeding and lookup name a solver (comments may point to them).
+/// Frames land on the output interval: with a fixed step of 3 ms and frames every 10 ms, the
+/// steps before each frame time are shortened (as before the end time) so every frame is at
+/// k x 10 ms, not at the first step past it (12, 21, 30, ... ms), and no step is shorter than
+/// half the fixed one.
+#[test]
+fn frames_land_on_the_output_interval() {
+    let out = tempfile::tempdir().expect("temp dir");
+    let options = RunOptions {
+        out: Some(out.path().to_owned()),
+        overrides: [
+            "time.dt=0.003",
+            "time.end=0.05",
+            "output.interval=0.01",
+            "output.vtk=true",
+        ]
+        .map(String::from)
+        .to_vec(),
+        ..RunOptions::default()
+    };
+    run(&shipped("hydrostatic_tank.toml"), &options).expect("the scene runs");
+    let pvd = std::fs::read_to_string(out.path().join("particles.pvd")).expect("series");
+    let times: Vec<f64> = pvd
+        .split("timestep=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap().parse().expect("a time"))
+        .collect();
+    assert_eq!(times.len(), 6, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        assert!((t - 0.01 * k as f64).abs() < 1e-12, "frame {k} at {t}");
+    }
+    let metrics = std::fs::read_to_string(out.path().join("metrics.csv")).expect("metrics");
+    let dts: Vec<f64> = metrics
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().expect("dt"))
+        .collect();
+    assert!(dts.iter().all(|&dt| dt >= 0.0015 - 1e-15), "{dts:?}");
+}
+
 #[test]
 fn no_import_crosses_the_layers() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");

@@ -95,24 +95,32 @@ fn drive(
 ) -> Result<Vec<String>, RunError> {
     let bar = progress_bar(options.progress, end);
     let mut trace = Vec::new();
-    let mut next_frame = 0.0;
+    // Frame k is at k times the interval (a product, so the times do not drift).
+    let mut frame: u64 = 0;
+    let interval = p.frames.interval;
+    let frame_time = |k: u64| k as Real * interval;
     let mut steady = false;
     loop {
         let sim = &p.sim;
         let done = steady
             || end.time.is_some_and(|t| sim.time() >= t - TIME_EPS)
             || end.steps.is_some_and(|n| sim.steps() >= n);
-        if sim.time() >= next_frame - TIME_EPS || done {
+        if sim.time() >= frame_time(frame) - TIME_EPS || done {
             p.frames.write(sim)?;
-            while next_frame <= sim.time() + TIME_EPS {
-                next_frame += p.frames.interval;
+            while frame_time(frame) <= sim.time() + TIME_EPS {
+                frame += 1;
             }
         }
         if done {
             break;
         }
+        // Steps land on the next frame time as on the end time, whether or not frames are
+        // written, so a run's steps do not depend on its output formats.
+        let target = end
+            .time
+            .map_or(frame_time(frame), |t| t.min(frame_time(frame)));
         let rec = p
-            .step(end.time, options.trace.then_some(&mut trace))
+            .step(Some(target), options.trace.then_some(&mut trace))
             .map_err(|e| stopped(e, p.frames.count(), out))?;
         steady = end
             .steady

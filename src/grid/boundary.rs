@@ -81,7 +81,7 @@ impl Boundaries {
 
     /// Periodic axes.
     pub fn periodic(&self) -> [bool; 3] {
-        self.sides.map(|p| p[0] == GridSide::Periodic)
+        std::array::from_fn(|a| self.sides[a][0] == GridSide::Periodic)
     }
 
     /// The sides as the pressure solve sees them: open sides hold p = 0, every other side is a
@@ -89,8 +89,8 @@ impl Boundaries {
     pub fn pressure_boundary(&self) -> Boundary {
         Boundary {
             periodic: self.periodic(),
-            sides: self.sides.map(|pair| {
-                pair.map(|s| match s {
+            sides: std::array::from_fn(|a| {
+                std::array::from_fn(|s| match self.sides[a][s] {
                     GridSide::Open => Side::Open,
                     _ => Side::Wall,
                 })
@@ -103,14 +103,17 @@ impl Boundaries {
     /// (a mirror ghost about that value); slip walls and open sides have no shear. The sides
     /// normal to `a` are fixed faces themselves (or open, zero-gradient).
     pub fn diffusion_boundary(&self, a: usize) -> (DiffusionBoundary, [[Real; 2]; 3]) {
-        let condition = |b: usize, side: GridSide| match side {
+        // A profiled inflow is normal to its side (the scene checks it), so its tangential
+        // value is zero everywhere on it.
+        let condition = |b: usize, side: &GridSide| match side {
             _ if b == a => (DiffusionSide::Neumann, 0.0),
             GridSide::Wall => (DiffusionSide::Mirror, 0.0),
             GridSide::MovingWall(v) | GridSide::Inflow(v) => (DiffusionSide::Mirror, v[a]),
+            GridSide::ProfiledInflow(p) => (DiffusionSide::Mirror, p.velocity[a]),
             GridSide::Slip | GridSide::Open | GridSide::Periodic => (DiffusionSide::Neumann, 0.0),
         };
         let both: [[(DiffusionSide, Real); 2]; 3] =
-            std::array::from_fn(|b| self.sides[b].map(|s| condition(b, s)));
+            std::array::from_fn(|b| std::array::from_fn(|s| condition(b, &self.sides[b][s])));
         (
             DiffusionBoundary {
                 periodic: self.periodic(),
@@ -233,7 +236,11 @@ impl Boundaries {
         for a in 0..3 {
             let n = grid.dims[a];
             let periodic = self.sides[a][0] == GridSide::Periodic;
-            let sides = self.sides[a];
+            let sides = &self.sides[a];
+            let (side_lo, side_hi) = (
+                grid.origin,
+                grid.origin + Vec3::from(grid.dims.map(|d| d as Real)) * grid.dx,
+            );
             let [m1, m2] = [n1 + usize::from(a == 1), n2 + usize::from(a == 2)];
             fn slabs<T: Send>(x: &mut Array3<T>, len: usize) -> rayon::slice::ChunksMut<'_, T> {
                 x.as_slice_mut()
@@ -288,10 +295,16 @@ impl Boundaries {
                                 let (v, w, origin) = &motion[body as usize];
                                 Some((v + w.cross(&(x - origin)))[a])
                             } else if left.is_none() || right.is_none() {
-                                match sides[usize::from(left.is_some())] {
-                                    GridSide::Wall | GridSide::Slip => Some(0.0),
-                                    GridSide::MovingWall(v) | GridSide::Inflow(v) => Some(v[a]),
-                                    GridSide::Open | GridSide::Periodic => None,
+                                match &sides[usize::from(left.is_some())] {
+                                    GridSide::Slip => Some(0.0),
+                                    side => side
+                                        .velocity_at(
+                                            &grid.face_center(a, idx),
+                                            &side_lo,
+                                            &side_hi,
+                                            a,
+                                        )
+                                        .map(|v| v[a]),
                                 }
                             } else {
                                 None

@@ -30,7 +30,8 @@ pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, Diffusion
 pub use interp::Stagger;
 pub use mac::MacGrid;
 pub use params::{
-    Advection, GridBoundary, GridParams, GridSide, Smoke, SmokeSource, ViscosityScheme,
+    Advection, GridBoundary, GridParams, GridSide, InflowProfile, ProfileShape, Smoke, SmokeSource,
+    ViscosityScheme,
 };
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,

@@ -132,8 +132,8 @@ impl GridSolver {
     /// Builds the grid of `params` with its obstacles `bodies`, at rest or at the initial
     /// velocity.
     pub fn new(params: &GridParams, bodies: Vec<RigidBody>) -> Result<Self, GridError> {
-        let sides = params.sides;
-        let periodic = sides.map(|p| p[0] == super::params::GridSide::Periodic);
+        let sides = params.sides.clone();
+        let periodic = std::array::from_fn(|a| sides[a][0] == super::params::GridSide::Periodic);
         let mut mac = MacGrid::new(params.resolution, params.dx, params.origin, periodic);
         for (a, u) in mac.u.iter_mut().enumerate() {
             u.fill(params.initial_velocity[a]);
@@ -234,7 +234,7 @@ impl GridSolver {
         self.ran.clear();
         if self.bodies.iter().any(RigidBody::is_moving) {
             self.ran.push("obstacles");
-            let sides = self.bounds.sides;
+            let sides = self.bounds.sides.clone();
             self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
             let cells = self.bounds.cell_kinds();
             if cells != self.system_cells {

@@ -50,7 +50,7 @@ pub fn boundary_cells(solver: &GridSolver, body: usize) -> Vec<[usize; 3]> {
 /// periodic sides are not walls).
 pub fn wall_distance(solver: &GridSolver) -> Array3<Real> {
     let mac = &solver.mac;
-    let sides = solver.bounds.sides;
+    let sides = &solver.bounds.sides;
     let t = solver.time();
     let poses: Vec<_> = solver.bodies.iter().map(|b| b.pose(t)).collect();
     let mut out = Array3::zeros(mac.dims);
@@ -63,7 +63,7 @@ pub fn wall_distance(solver: &GridSolver) -> Array3<Real> {
                 (0, x[a] - mac.origin[a]),
                 (1, mac.origin[a] + extent - x[a]),
             ] {
-                if is_wall(sides[a][side]) {
+                if is_wall(&sides[a][side]) {
                     best = best.min(gap);
                 }
             }
@@ -77,7 +77,7 @@ pub fn wall_distance(solver: &GridSolver) -> Array3<Real> {
     out
 }
 
-fn is_wall(side: GridSide) -> bool {
+fn is_wall(side: &GridSide) -> bool {
     matches!(
         side,
         GridSide::Wall | GridSide::MovingWall(_) | GridSide::Slip

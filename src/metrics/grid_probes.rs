@@ -7,7 +7,7 @@ use super::spec::Probe;
 use crate::io::{CsvSeries, IoError};
 use crate::{Point3, Real, Vec3};
 
-use crate::grid::{GridSide, GridSolver};
+use crate::grid::GridSolver;
 
 /// The force of the fluid on one obstacle, N.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -98,15 +98,19 @@ pub fn velocity_with_walls(solver: &GridSolver, x: &Vec3) -> Vec3 {
     let mac = &solver.mac;
     let half = 0.5 * mac.dx;
     let mut v = mac.velocity_at(x);
+    let (lo, hi) = (
+        mac.origin,
+        mac.origin + Vec3::from(mac.dims.map(|d| d as Real)) * mac.dx,
+    );
     for (b, sides) in solver.bounds.sides.iter().enumerate() {
         let extent = mac.dims[b] as Real * mac.dx;
         for (end, side) in sides.iter().enumerate() {
-            let wall = match side {
-                GridSide::Wall => Vec3::zeros(),
-                GridSide::MovingWall(w) | GridSide::Inflow(w) => Vec3::from(*w),
-                GridSide::Slip | GridSide::Open | GridSide::Periodic => continue,
-            };
             let plane = mac.origin[b] + if end == 0 { 0.0 } else { extent };
+            let mut on = *x;
+            on[b] = plane;
+            let Some(wall) = side.velocity_at(&on, &lo, &hi, b) else {
+                continue;
+            };
             let gap = (x[b] - plane).abs();
             if gap >= half {
                 continue;

@@ -108,12 +108,20 @@ impl Scene {
             return Ok(());
         }
         let extent: [Real; 3] = std::array::from_fn(|a| self.domain.max[a] - self.domain.min[a]);
+        let (lo, hi) = (
+            crate::Vec3::from(self.domain.min),
+            crate::Vec3::from(self.domain.max),
+        );
         let (mut net, mut scale) = (0.0, 0.0);
         for (axis, pair) in sides.iter().enumerate() {
             let area = extent[(axis + 1) % 3] * extent[(axis + 2) % 3];
             for (s, side) in pair.iter().enumerate() {
-                if let GridSide::Inflow(v) = side {
-                    let inward = if s == 0 { v[axis] } else { -v[axis] };
+                let mean = match side {
+                    GridSide::ProfiledInflow(p) => p.mean_factor(&lo, &hi),
+                    _ => 1.0,
+                };
+                if let Some(v) = side.inflow_peak() {
+                    let inward = mean * if s == 0 { v[axis] } else { -v[axis] };
                     net += inward * area;
                     scale += inward.abs() * area;
                 }
@@ -197,7 +205,7 @@ impl Scene {
         let sides = grid.boundary.sides();
         const NAMES: [[&str; 2]; 3] = [["x_min", "x_max"], ["y_min", "y_max"], ["z_min", "z_max"]];
         for (axis, pair) in sides.iter().enumerate() {
-            let periodic = pair.map(|s| s == GridSide::Periodic);
+            let periodic = [0, 1].map(|s| pair[s] == GridSide::Periodic);
             if periodic[0] != periodic[1] {
                 let lone = if periodic[0] { 0 } else { 1 };
                 return Err(c.invalid(
@@ -223,6 +231,7 @@ impl Scene {
                         }
                     }
                     GridSide::Inflow(v) => c.vec3(&key, *v)?,
+                    GridSide::ProfiledInflow(p) => check_profile(c, &key, p, axis)?,
                     _ => {}
                 }
             }
@@ -298,4 +307,63 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// A profiled inflow is normal to its side, varies across an axis along the side (`plane`,
+/// `table`), and a table's coordinates increase with finite factors.
+fn check_profile(
+    c: &Checker,
+    key: &str,
+    p: &crate::grid::InflowProfile,
+    axis: usize,
+) -> Result<(), SceneError> {
+    use crate::grid::ProfileShape;
+    let key = format!("{key}.profiled_inflow");
+    c.vec3(&format!("{key}.velocity"), p.velocity)?;
+    if let Some(a) = (0..3).find(|&a| a != axis && p.velocity[a] != 0.0) {
+        return Err(c.invalid(
+            format!("{key}.velocity[{a}]"),
+            p.velocity[a],
+            "0: a profiled inflow is normal to its side",
+        ));
+    }
+    let needs_axis = matches!(p.shape, ProfileShape::Plane | ProfileShape::Table);
+    match p.across {
+        Some(a) if a > 2 || a == axis => {
+            return Err(c.invalid(
+                format!("{key}.across"),
+                a,
+                format!("an axis along the side (0, 1 or 2 for x, y, z; not {axis}, its normal)"),
+            ))
+        }
+        None if needs_axis => {
+            return Err(c.invalid(
+                format!("{key}.across"),
+                "nothing",
+                "the axis along the side the profile varies across (0, 1 or 2 for x, y, z)",
+            ))
+        }
+        _ => {}
+    }
+    if p.shape == ProfileShape::Table {
+        if p.table.is_empty() {
+            return Err(c.invalid(format!("{key}.table"), "[]", "[coordinate, factor] pairs"));
+        }
+        for (i, pair) in p.table.iter().enumerate() {
+            c.num(&format!("{key}.table[{i}][1]"), pair[1], Interval::any())?;
+            let after = i.checked_sub(1).map(|j| p.table[j][0]);
+            let allowed = match after {
+                Some(x) => Interval::gt(x).note("the coordinate before it (increasing)"),
+                None => Interval::any(),
+            };
+            c.num(&format!("{key}.table[{i}][0]"), pair[0], allowed)?;
+        }
+    } else if !p.table.is_empty() {
+        return Err(c.invalid(
+            format!("{key}.table"),
+            "a table",
+            "no table unless shape = \"table\"",
+        ));
+    }
+    Ok(())
 }

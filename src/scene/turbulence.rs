@@ -2,7 +2,7 @@
 //! the `[turbulence]` table, their checks, and the velocity scale |U_0| of Eq. 8.
 
 use super::validate::{Checker, Interval};
-use super::{Body, GridSide, Scene, SceneError};
+use super::{Body, Scene, SceneError};
 use crate::abl::TurbulenceParams;
 use crate::geometry::RigidBody;
 use crate::Real;
@@ -31,10 +31,7 @@ impl Scene {
         }
         let inflow = self.grid.iter().flat_map(|g| g.boundary.sides()).flatten();
         let inflow = inflow
-            .filter_map(|side| match side {
-                GridSide::Inflow(v) => Some(norm(v)),
-                _ => None,
-            })
+            .filter_map(|side| side.inflow_peak().map(norm))
             .chain(
                 self.fluid
                     .iter()

@@ -64,7 +64,7 @@ pub fn grid(
         dx,
         origin: Vec3::repeat(-h),
         initial_velocity,
-        sides: [[side; 2]; 3],
+        sides: std::array::from_fn(|_| [side.clone(), side.clone()]),
         advection: g.advection,
         reflection: false,
         viscosity_scheme: ViscosityScheme::BackwardEuler,

@@ -262,7 +262,7 @@ fn solvers_build_from_parameters_alone() {
         dx: 0.125,
         origin: Vec3::zeros(),
         initial_velocity: v,
-        sides: [[GridSide::Periodic; 2]; 3],
+        sides: std::array::from_fn(|_| [GridSide::Periodic, GridSide::Periodic]),
         advection: Default::default(),
         reflection: false,
         viscosity_scheme: Default::default(),

@@ -123,6 +123,13 @@ impl OpenBoundaries {
                 let mut at = first.iter();
                 e.sites
                     .retain(|_| keep(at.next().expect("one position per site")));
+                if e.sites.is_empty() {
+                    tracing::warn!(
+                        "the inflow on {} has no lattice site clear of the walls: no fluid \
+                         enters through it",
+                        side.name()
+                    );
+                }
                 e
             })
             .collect();

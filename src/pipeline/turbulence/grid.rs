@@ -16,7 +16,7 @@ use ndarray::Array3;
 use super::{push_seeds, Common, Laps, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER};
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
-use crate::grid::advect::advect_into;
+use crate::grid::advect::{advect_band_into, Band};
 use crate::grid::walls::{boundary_cells, mean_velocity, shell_cells, wall_distance};
 use crate::grid::{Advection, GridSolver};
 use crate::pipeline::simulation::{Simulation, StepError};
@@ -58,6 +58,29 @@ fn flush(abl: &mut [Array3<Real>; 3], grid: &GridSolver) {
                 (*a, *b, *c) = (0.0, 0.0, 0.0);
             }
         });
+}
+
+/// The cells omega_ABL can reach in a step: the box of its nonzero cells widened as
+/// [`advect_band_into`] asks (twice the cells the fastest face moves in `dt`, plus three), so
+/// its advection costs the plume's extent, not the grid's. Empty when the field is zero.
+fn band(abl: &[Array3<Real>; 3], grid: &GridSolver, dt: Real) -> Band {
+    let dims = grid.mac.dims;
+    let (mut lo, mut hi) = (dims, [0; 3]);
+    for field in abl {
+        for ((i, j, k), &w) in field.indexed_iter() {
+            if w != 0.0 {
+                for (a, c) in [i, j, k].into_iter().enumerate() {
+                    lo[a] = lo[a].min(c);
+                    hi[a] = hi[a].max(c + 1);
+                }
+            }
+        }
+    }
+    if hi[0] == 0 {
+        return [0..0, 0..0, 0..0];
+    }
+    let pad = 2 * (grid.mac.max_face_speed() * dt / grid.mac.dx).ceil() as usize + 3;
+    std::array::from_fn(|a| lo[a].saturating_sub(pad)..(hi[a] + pad).min(dims[a]))
 }
 
 /// What is cached of an obstacle's cells while it does not move.
@@ -202,7 +225,8 @@ impl Stage for GridTurbulence {
                 (
                     PARTS[1],
                     format!(
-                        "omega_ABL by {:?}, zero in obstacles, flushed below {FLUSH:e} of its peak",
+                        "omega_ABL by {:?} over the band its nonzero cells can reach, zero in \
+                         obstacles, flushed below {FLUSH:e} of its peak",
                         self.scheme
                     ),
                 ),
@@ -232,13 +256,15 @@ impl Stage for GridTurbulence {
         self.attach(grid, abl);
         laps.lap(0);
         let stagger = grid.mac.cell_stagger();
+        let band = band(abl, grid, dt);
         for field in abl.iter_mut() {
-            advect_into(
+            advect_band_into(
                 field,
                 stagger,
                 &grid.mac,
                 dt,
                 self.scheme,
+                &band,
                 &mut self.advected,
             );
             std::mem::swap(field, &mut self.advected);

@@ -18,7 +18,7 @@ use crate::spec::ObstacleSpec;
 /// Options of `eddy-precompute bench`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BenchArgs {
-    /// Grid resolutions timed per direction (sphere, default steps 50 + 50, one thread).
+    /// Grid resolutions timed per direction (sphere, default settings, one thread).
     #[arg(long, value_delimiter = ',', default_value = "16,32,48,64")]
     pub sizes: Vec<usize>,
     /// Azimuth sample counts of the interpolation error (polar samples: half of these, + 1).
@@ -71,7 +71,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 
 /// Seconds of one direction on one thread, translation and rotation, per resolution.
 fn timing(sizes: &[usize]) -> anyhow::Result<()> {
-    println!("\n# time per direction (sphere, domain 4, 50 + 50 steps, one thread)");
+    println!(
+        "\n# time per direction (sphere, domain 4, default settings: at most 50 + 50 steps, \
+         settle_tolerance 4e-3, tolerance 1e-3; one thread)"
+    );
     println!("| grid | points | translation s | rotation s | 2 x 162 distinct on 2 cores, min |");
     println!("|---|---|---|---|---|");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;

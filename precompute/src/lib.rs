@@ -5,9 +5,11 @@
 
 pub mod bench;
 pub mod parts;
+#[cfg(feature = "mpi")]
+pub mod ranks;
 pub mod run;
 pub mod solve;
 pub mod spec;
 
-pub use run::{merge, precompute, RunOptions, Summary};
+pub use run::{merge, precompute, precompute_with, RunOptions, Summary};
 pub use spec::ObstacleSpec;

@@ -104,8 +104,92 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((k, n))
 }
 
-/// Runs the precomputation of `spec` as `options` say.
+/// A finished direction as it reaches the run: its values (or why it failed) and its wall
+/// time on one thread, s.
+pub type Finished = (Job, anyhow::Result<Vec<Vec3>>, f64);
+
+/// What computes the directions of a run: threads of this process ([`Threads`]), or MPI ranks
+/// (`crate::mpi`, feature `mpi`). `compute` hands out the jobs of `todo` and passes each
+/// finished one to `deliver` as it arrives; once `deliver` returns false it hands out no more
+/// and returns when those in flight are done.
+pub trait Engine {
+    fn compute(
+        &mut self,
+        spec: &ObstacleSpec,
+        surface: &Surface,
+        todo: &[Job],
+        deliver: &mut dyn FnMut(Finished) -> bool,
+    );
+}
+
+/// One direction, on one thread (so its values do not depend on how many run at once).
+pub fn compute_job(spec: &ObstacleSpec, surface: &Surface, job: &Job) -> anyhow::Result<Vec<Vec3>> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let s = spec.samplings()[usize::from(job.kind == MotionKind::Rotation)];
+    let d = s.direction(job.polar, job.azimuth);
+    pool.install(|| solve(spec, surface, job.kind, &d))
+}
+
+/// `workers` directions at once, one thread each, pulling the next job when done.
+pub struct Threads {
+    pub workers: usize,
+}
+
+impl Engine for Threads {
+    fn compute(
+        &mut self,
+        spec: &ObstacleSpec,
+        surface: &Surface,
+        todo: &[Job],
+        deliver: &mut dyn FnMut(Finished) -> bool,
+    ) {
+        let next = AtomicUsize::new(0);
+        let stop = AtomicBool::new(false);
+        let (tx, rx) = mpsc::channel::<Finished>();
+        std::thread::scope(|scope| {
+            for _ in 0..self.workers.max(1).min(todo.len().max(1)) {
+                let tx = tx.clone();
+                let (next, stop) = (&next, &stop);
+                scope.spawn(move || {
+                    while !stop.load(Ordering::Relaxed) {
+                        let Some(&job) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
+                            break;
+                        };
+                        let started = Instant::now();
+                        let result = compute_job(spec, surface, &job);
+                        let _ = tx.send((job, result, started.elapsed().as_secs_f64()));
+                    }
+                });
+            }
+            drop(tx);
+            for finished in rx {
+                if !deliver(finished) {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+        });
+    }
+}
+
+/// Runs the precomputation of `spec` as `options` say, on `options.workers` threads.
 pub fn precompute(spec: &ObstacleSpec, options: &RunOptions) -> anyhow::Result<Summary> {
+    let mut threads = Threads {
+        workers: options.workers,
+    };
+    precompute_with(spec, options, &mut threads)
+}
+
+/// [`precompute`] with the directions computed by `engine`. Only this process reads and
+/// writes the output and its parts: each finished direction becomes a part as it arrives, so
+/// a run killed at any moment loses only the directions in flight.
+pub fn precompute_with(
+    spec: &ObstacleSpec,
+    options: &RunOptions,
+    engine: &mut dyn Engine,
+) -> anyhow::Result<Summary> {
     let surface = Surface::of(spec)?;
     let mut data = empty_database(spec, &surface)?;
     let fingerprint = data.header.fingerprint.clone();
@@ -154,66 +238,45 @@ pub fn precompute(spec: &ObstacleSpec, options: &RunOptions) -> anyhow::Result<S
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let bar = progress_bar(options.progress, mine.len() as u64, reused as u64);
     let mut seconds = 0.0;
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let (tx, rx) = mpsc::channel::<(Job, anyhow::Result<Vec<Vec3>>, f64)>();
     let mut failure = None;
-    std::thread::scope(|scope| {
-        for _ in 0..options.workers.max(1).min(todo.len().max(1)) {
-            let tx = tx.clone();
-            let (todo, next, stop, surface, dir, fingerprint) =
-                (&todo, &next, &stop, &surface, &dir, &fingerprint);
-            scope.spawn(move || {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
-                while !stop.load(Ordering::Relaxed) {
-                    let Some(&job) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
-                        break;
-                    };
-                    let started = Instant::now();
-                    let result =
-                        pool.as_ref()
-                            .map_err(|e| anyhow::anyhow!("{e}"))
-                            .and_then(|pool| {
-                                let s =
-                                    spec.samplings()[usize::from(job.kind == MotionKind::Rotation)];
-                                let d = s.direction(job.polar, job.azimuth);
-                                let values = pool.install(|| solve(spec, surface, job.kind, &d))?;
-                                parts::write(dir, fingerprint, &job, &values)?;
-                                Ok(values)
-                            });
-                    let failed = result.is_err();
-                    let _ = tx.send((job, result, started.elapsed().as_secs_f64()));
-                    if failed {
-                        break;
-                    }
-                }
-            });
-        }
-        drop(tx);
-        for (job, result, secs) in rx {
-            match result {
-                Ok(values) => {
-                    data.table_mut(job.kind)
-                        .set(job.polar, job.azimuth, &values);
-                    seconds += secs;
-                    bar.inc(1);
-                    bar.set_message(format!("{secs:.1} s/direction"));
-                }
-                Err(e) => {
-                    stop.store(true, Ordering::Relaxed);
-                    failure.get_or_insert(e.context(format!(
-                        "{} direction (polar {}, azimuth {})",
-                        job.kind.name(),
-                        job.polar,
-                        job.azimuth
-                    )));
-                }
+    engine.compute(spec, &surface, &todo, &mut |(job, result, secs)| {
+        let kept = result.and_then(|values| {
+            parts::write(&dir, &fingerprint, &job, &values)?;
+            Ok(values)
+        });
+        match kept {
+            Ok(values) => {
+                data.table_mut(job.kind)
+                    .set(job.polar, job.azimuth, &values);
+                seconds += secs;
+                bar.inc(1);
+                bar.set_message(format!("{secs:.1} s/direction"));
+            }
+            Err(e) => {
+                failure.get_or_insert(e.context(format!(
+                    "{} direction (polar {}, azimuth {})",
+                    job.kind.name(),
+                    job.polar,
+                    job.azimuth
+                )));
             }
         }
+        failure.is_none()
     });
     bar.finish_and_clear();
     if let Some(e) = failure {
         return Err(e);
+    }
+    if let Some(job) = todo.iter().find(|j| {
+        let t = data.table(j.kind);
+        !t.complete[t.sampling.row(j.polar, j.azimuth)]
+    }) {
+        bail!(
+            "the run ended with {} direction (polar {}, azimuth {}) not computed",
+            job.kind.name(),
+            job.polar,
+            job.azimuth
+        );
     }
     data.write(&options.out)?;
     std::fs::remove_dir_all(&dir).with_context(|| format!("removing {}", dir.display()))?;

@@ -46,9 +46,9 @@ pub fn grid(
     kind: MotionKind,
     direction: &Vec3,
 ) -> anyhow::Result<(GridParams, Body)> {
-    let h = spec.half_side()?;
     let g = &spec.grid;
-    let dx = spec.spacing()?;
+    let grid_box = spec.grid_box()?;
+    let dx = grid_box.dx;
     let speed = match kind {
         MotionKind::Translation => 1.0,
         MotionKind::Rotation => reach(spec)?,
@@ -60,9 +60,9 @@ pub fn grid(
         MotionKind::Rotation => (GridSide::Open, Vec3::zeros(), (*direction).into()),
     };
     let params = GridParams {
-        resolution: [g.resolution; 3],
+        resolution: grid_box.cells,
         dx,
-        origin: Vec3::repeat(-h),
+        origin: grid_box.origin(),
         initial_velocity,
         sides: std::array::from_fn(|_| [side.clone(), side.clone()]),
         advection: g.advection,
@@ -113,13 +113,13 @@ pub fn solve(
     let (params, body) = grid(spec, kind, direction)?;
     let body = eddy::geometry::RigidBody::from_scene(&body, 0)?;
     let mut solver = GridSolver::new(&params, vec![body])?;
-    let cells = spec.grid.resolution.pow(3);
-    if solver.bounds.fluid_cells() == cells {
+    let grid_box = spec.grid_box()?;
+    if solver.bounds.fluid_cells() == grid_box.cells.iter().product::<usize>() {
         bail!(
-            "obstacle '{}' covers no cell centre of the {n}^3 precomputation grid: raise \
+            "obstacle '{}' covers no cell centre of the {} precomputation grid: raise \
              grid.resolution or lower grid.domain",
             spec.name,
-            n = spec.grid.resolution
+            grid_box.describe()
         );
     }
     if kind == MotionKind::Translation {
@@ -128,11 +128,6 @@ pub fn solve(
         let flow = -direction;
         solver.set_velocity(|_| flow)?;
     }
-    for _ in 0..spec.grid.stabilise_steps {
-        solver.step(None)?;
-    }
-    // The scene's solves ran at the stabilising tolerance; the averaged flow gets the tight one.
-    solver.set_solver_tolerance(spec.grid.tolerance);
     let l = spec.layer.thickness * spec.spacing()?;
     let outside: Vec<Point3> = surface
         .points
@@ -140,17 +135,26 @@ pub fn solve(
         .zip(&surface.normals)
         .map(|(x, n)| x + n * l)
         .collect();
+    let mut settle = Settle::new(spec.grid.settle_tolerance);
+    for _ in 0..spec.grid.stabilise_steps {
+        solver.step(None)?;
+        if settle.steady(&relative_flow(&solver, &outside)) {
+            break;
+        }
+    }
+    // The scene's solves ran at the stabilising tolerance; the averaged flow gets its own.
+    solver.set_solver_tolerance(spec.grid.tolerance);
+    let steps = if settle.settled {
+        STEADY_AVERAGE_STEPS.min(spec.grid.average_steps)
+    } else {
+        spec.grid.average_steps
+    };
     let mut sum = vec![Vec3::zeros(); outside.len()];
     let mut time = 0.0;
-    for _ in 0..spec.grid.average_steps {
+    for _ in 0..steps {
         let dt = solver.step(None)?.dt;
-        let body = &solver.bodies[0];
-        let t = solver.time();
-        let pose = body.pose(t);
-        for (s, xe) in sum.iter_mut().zip(&outside) {
-            let world = pose * xe;
-            let u = solver.mac.velocity_at(&world.coords) - body.velocity_at(t, &world);
-            *s += pose.rotation.inverse_transform_vector(&u) * dt;
+        for (s, u) in sum.iter_mut().zip(relative_flow(&solver, &outside)) {
+            *s += u * dt;
         }
         time += dt;
     }
@@ -160,4 +164,77 @@ pub fn solve(
         .zip(&surface.normals)
         .map(|(s, n)| (s / time).cross(n) * beta)
         .collect())
+}
+
+/// Steps averaged once the flow has settled: the average of a steady flow is the flow, and a
+/// few steps smooth what is left of its approach.
+pub const STEADY_AVERAGE_STEPS: u32 = 5;
+
+/// Steps over which the decay rate of the change is measured.
+const DECAY_WINDOW: usize = 5;
+
+/// `U_rel = R^T (U(x_e) - v_body(x_e))` at the world positions of the object-frame points
+/// `outside`: the flow just outside the layer, relative to the wall, in the object's frame.
+fn relative_flow(solver: &GridSolver, outside: &[Point3]) -> Vec<Vec3> {
+    let body = &solver.bodies[0];
+    let t = solver.time();
+    let pose = body.pose(t);
+    outside
+        .iter()
+        .map(|xe| {
+            let world = pose * xe;
+            let u = solver.mac.velocity_at(&world.coords) - body.velocity_at(t, &world);
+            pose.rotation.inverse_transform_vector(&u)
+        })
+        .collect()
+}
+
+/// Whether the sampled flow has settled. Its relative change per step, c_k = sum |U_k -
+/// U_(k-1)| / sum |U_k|, decays geometrically as a steady flow is approached (ratio r per
+/// step, measured over [`DECAY_WINDOW`] steps), so the distance still to go is about
+/// c_k r / (1 - r); the flow counts as steady once that estimate is below the tolerance. A
+/// flow that keeps changing (a wake that sheds; the spin-up around a rotating object, whose
+/// samples also move across the grid) has r near 1 and never settles: it gets the full step
+/// counts.
+struct Settle {
+    tolerance: Real,
+    last: Option<Vec<Vec3>>,
+    changes: Vec<Real>,
+    settled: bool,
+}
+
+impl Settle {
+    fn new(tolerance: Real) -> Self {
+        Self {
+            tolerance,
+            last: None,
+            changes: Vec::new(),
+            settled: false,
+        }
+    }
+
+    /// Takes the samples of one more step; true once the flow has settled.
+    fn steady(&mut self, flow: &[Vec3]) -> bool {
+        if self.tolerance <= 0.0 {
+            return false;
+        }
+        if let Some(last) = &self.last {
+            let change: Real = flow.iter().zip(last).map(|(a, b)| (a - b).norm()).sum();
+            let size: Real = flow.iter().map(|a| a.norm()).sum();
+            self.changes
+                .push(if size > 0.0 { change / size } else { 0.0 });
+        }
+        self.last = Some(flow.to_vec());
+        let n = self.changes.len();
+        if n > DECAY_WINDOW {
+            let (now, before) = (self.changes[n - 1], self.changes[n - 1 - DECAY_WINDOW]);
+            if now == 0.0 {
+                self.settled = true;
+            } else if before > 0.0 {
+                let r = (now / before).powf(1.0 / DECAY_WINDOW as Real);
+                self.settled = r < 1.0 && now * r / (1.0 - r) < self.tolerance;
+            }
+        }
+        self.settled
+    }
 }

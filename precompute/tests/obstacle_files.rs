@@ -6,6 +6,7 @@ use std::path::Path;
 use eddy::abl::MotionKind;
 use eddy::Vec3;
 use eddy_precompute::solve::{solve, Surface};
+use eddy_precompute::spec::PerAxis;
 use eddy_precompute::ObstacleSpec;
 
 fn err(text: &str, overrides: &[&str]) -> String {
@@ -32,7 +33,10 @@ fn shipped_obstacles_load_and_overrides_apply() {
         ],
     )
     .expect("overrides");
-    assert_eq!((spec.grid.resolution, spec.sampling.rotation), (24, [4, 6]));
+    assert_eq!(
+        (spec.grid.resolution, spec.sampling.rotation),
+        (PerAxis::Same(24), [4, 6])
+    );
     // The fingerprint covers the settings: an override changes it, the geometry part stays.
     let base = ObstacleSpec::load(&dir.join("sphere.toml"), &[]).expect("loads");
     let (a, ga) = base.fingerprints().expect("fingerprints");
@@ -67,4 +71,59 @@ fn an_obstacle_the_grid_cannot_resolve_is_refused() {
     let surface = Surface::of(&spec).expect("surface");
     let e = solve(&spec, &surface, MotionKind::Translation, &Vec3::x()).expect_err("unresolved");
     assert!(e.to_string().contains("covers no cell"), "{e}");
+}
+
+fn parse(text: &str, overrides: &[&str]) -> ObstacleSpec {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    ObstacleSpec::parse(text, Path::new("box.toml"), &o).expect("valid obstacle file")
+}
+
+/// Box domains: per-axis multiples of a rod's extent make a box of cubic cells whose sides
+/// cover at least those multiples, with far fewer cells than the cube; the same multiple on
+/// every axis of a sphere is the cube, and computes the same omega_pre bit for bit.
+#[test]
+fn box_domains_follow_the_object_per_axis() {
+    let rod = "name = \"rod\"\nshape = { type = \"box\", half_extents = [1.0, 0.1, 0.1] }\n";
+    let cube = parse(rod, &["grid.resolution=32"]).grid_box().expect("box");
+    assert_eq!(cube.cells, [32; 3]);
+    // x: 2 x 2 x 1 m = 4 m in 32 cells of 0.125 m; y, z: 2 x 6 x 0.1 m = 1.2 m, rounded to
+    // 10 cells (1.25 m).
+    let b = parse(rod, &["grid.domain=[2.0, 6.0, 6.0]", "grid.resolution=32"])
+        .grid_box()
+        .expect("box");
+    assert_eq!(b.cells, [32, 10, 10]);
+    assert!((b.dx - 0.125).abs() < 1e-15, "{}", b.dx);
+    assert!((b.half[0] - 2.0).abs() < 1e-15 && (b.half[1] - 0.625).abs() < 1e-12);
+    // Per-axis counts: the cell is the largest side over its count, max(4/40, 1.2/8) = 0.15 m.
+    let b = parse(
+        rod,
+        &["grid.domain=[2.0, 6.0, 6.0]", "grid.resolution=[40, 8, 8]"],
+    )
+    .grid_box()
+    .expect("box");
+    assert_eq!(b.cells, [40, 8, 8]);
+    assert!((b.dx - 0.15).abs() < 1e-15, "{}", b.dx);
+    assert!(b.half[0] * 2.0 >= 4.0 && b.half[1] * 2.0 >= 1.2 - 1e-12);
+    assert!(err(rod, &["grid.domain=[2.0, 1.0, 6.0]"]).contains("grid.domain"));
+    assert!(err(rod, &["grid.resolution=[32, 4, 8]"]).contains("grid.resolution"));
+
+    let sphere = "name = \"s\"\nshape = { type = \"sphere\", radius = 0.5 }\n";
+    let steps = [
+        "grid.resolution=12",
+        "grid.stabilise_steps=3",
+        "grid.average_steps=2",
+    ];
+    let a = parse(sphere, &steps);
+    let mut each = steps.to_vec();
+    each.push("grid.domain=[4.0, 4.0, 4.0]");
+    let b = parse(sphere, &each);
+    assert_eq!(a.grid_box().expect("box"), b.grid_box().expect("box"));
+    let surface = Surface::of(&a).expect("surface");
+    let d = Vec3::new(0.3, -0.2, 0.9).normalize();
+    for kind in MotionKind::ALL {
+        assert_eq!(
+            solve(&a, &surface, kind, &d).expect("solves"),
+            solve(&b, &surface, kind, &d).expect("solves")
+        );
+    }
 }

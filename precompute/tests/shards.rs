@@ -1,4 +1,5 @@
-//! Sharding, merging and resuming: shards merged equal the unsharded database bit for bit,
+//! Sharding, merging and resuming: shards run as separate processes (a job array) and merged
+//! equal the unsharded database bit for bit,
 //! overlaps and gaps are refused, and a killed run resumed completes the same database.
 
 use std::path::{Path, PathBuf};
@@ -58,19 +59,42 @@ fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
         !parts::folder(&full).exists(),
         "parts are removed when done"
     );
-    let db = AblDatabase::open(&full, Some(&spec.shape)).expect("complete and ours");
 
+    // The job-array recipe of the README: shards as independent background processes (as a
+    // Slurm array runs them), then `merge`. Started before any database is open here, so no
+    // child inherits an HDF5 descriptor.
+    let file = tmp.path().join("sphere.toml");
     let shards: Vec<PathBuf> = (0..3)
-        .map(|k| {
-            let out = tmp.path().join(format!("shard{k}.h5"));
-            precompute(&spec, &options(out.clone(), Some((k, 3)), false)).expect("runs");
-            out
+        .map(|k| tmp.path().join(format!("shard{k}.h5")))
+        .collect();
+    let children: Vec<_> = shards
+        .iter()
+        .enumerate()
+        .map(|(k, out)| {
+            Command::new(env!("CARGO_BIN_EXE_eddy-precompute"))
+                .arg(&file)
+                .arg("--out")
+                .arg(out)
+                .args(["--shard", &format!("{k}/3"), "--jobs", "1"])
+                .spawn()
+                .expect("starts a shard")
         })
         .collect();
+    for mut child in children {
+        assert!(child.wait().expect("waits").success(), "a shard failed");
+    }
+    let merged = tmp.path().join("merged.h5");
+    let status = Command::new(env!("CARGO_BIN_EXE_eddy-precompute"))
+        .arg("merge")
+        .args(&shards)
+        .arg("--out")
+        .arg(&merged)
+        .status()
+        .expect("runs merge");
+    assert!(status.success(), "merge failed");
+    let db = AblDatabase::open(&full, Some(&spec.shape)).expect("complete and ours");
     let e = AblDatabase::open(&shards[0], None).expect_err("a shard is incomplete");
     assert!(e.to_string().contains("incomplete"), "{e}");
-    let merged = tmp.path().join("merged.h5");
-    merge(&shards, &merged).expect("merges");
     assert_eq!(AblData::read(&merged).expect("reads"), *db.data());
 
     let e = merge(&shards[..2], &tmp.path().join("gap.h5")).expect_err("a gap");

@@ -31,11 +31,29 @@ pub struct ObstacleSpec {
 }
 
 /// One value for every axis, or one per axis (`[x, y, z]`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum PerAxis<T> {
     Same(T),
     Each([T; 3]),
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for PerAxis<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw<T> {
+            Same(T),
+            Each([T; 3]),
+        }
+        match Raw::deserialize(d) {
+            Ok(Raw::Same(v)) => Ok(PerAxis::Same(v)),
+            Ok(Raw::Each(v)) => Ok(PerAxis::Each(v)),
+            Err(_) => Err(serde::de::Error::custom(
+                "expected one number for every axis or three, [x, y, z]",
+            )),
+        }
+    }
 }
 
 impl<T: Copy> PerAxis<T> {

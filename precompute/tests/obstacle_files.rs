@@ -106,6 +106,11 @@ fn box_domains_follow_the_object_per_axis() {
     assert!(b.half[0] * 2.0 >= 4.0 && b.half[1] * 2.0 >= 1.2 - 1e-12);
     assert!(err(rod, &["grid.domain=[2.0, 1.0, 6.0]"]).contains("grid.domain"));
     assert!(err(rod, &["grid.resolution=[32, 4, 8]"]).contains("grid.resolution"));
+    let two = err(rod, &["grid.domain=[4.0, 3.0]"]);
+    assert!(
+        two.contains("grid.domain") && two.contains("[x, y, z]"),
+        "{two}"
+    );
 
     let sphere = "name = \"s\"\nshape = { type = \"sphere\", radius = 0.5 }\n";
     let steps = [

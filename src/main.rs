@@ -41,7 +41,14 @@ enum Command {
         /// Print the stages the scene will run, and exit.
         #[arg(long)]
         plan: bool,
+        /// Write how the run ended (finished, unstable, failed; its cause; peak memory) to
+        /// this TOML file: what `eddy sweep` reads of each point.
+        #[arg(long, value_name = "FILE")]
+        status: Option<PathBuf>,
     },
+    /// A parameter study of a scene: one run per point of the varied values, each in its own
+    /// folder, and a sweep.csv with how each ended, its steps, wall time and peak memory.
+    Sweep(cli::sweep::SweepArgs),
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(cli::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
@@ -92,55 +99,34 @@ fn run(command: Command) -> anyhow::Result<()> {
             until,
             steps,
             plan,
+            status,
         } => {
-            let options = RunOptions {
-                out,
-                overrides: set,
-                until,
-                steps,
-                progress: std::io::stderr().is_terminal(),
-                trace: false,
-            };
-            let resolved = run::resolve(&scene, &options)?;
-            if plan {
-                let built = Pipeline::build(&resolved)
-                    .with_context(|| format!("building {}", scene.display()))?;
-                print!("{}", Plan::of(&built));
-                return Ok(());
+            let result = run_one(scene, out, set, until, steps, plan);
+            if let Some(path) = status {
+                let (how, cause) = match &result {
+                    Ok(()) => (cli::sweep::Status::Finished, String::new()),
+                    Err(e) => {
+                        let unstable = e.chain().any(|c| {
+                            matches!(
+                                c.downcast_ref::<run::RunError>(),
+                                Some(run::RunError::Unstable { .. } | run::RunError::Grid { .. })
+                            )
+                        });
+                        let how = if unstable {
+                            cli::sweep::Status::Unstable
+                        } else {
+                            cli::sweep::Status::Failed
+                        };
+                        (how, format!("{e:#}"))
+                    }
+                };
+                cli::sweep::write_status(&path, how, &cause)?;
             }
-            eprintln!(
-                "eddy: running {} -> {}",
-                scene.display(),
-                run::output_dir(&resolved, &options).display()
-            );
-            let s = run::run_scene(&resolved, &options)
-                .with_context(|| format!("running {}", scene.display()))?;
-            let rate = |n: usize| s.steps as f64 * n as f64 / s.wall_seconds / 1e6;
-            let mut sizes = Vec::new();
-            if s.fluid_particles > 0 {
-                sizes.push(format!(
-                    "{} fluid particles, {} boundary particles, {:.2} M fluid particle-steps/s",
-                    s.fluid_particles,
-                    s.boundary_particles,
-                    rate(s.fluid_particles)
-                ));
-            }
-            if s.grid_cells > 0 {
-                sizes.push(format!(
-                    "{} cells, {:.2} M cell-steps/s",
-                    s.grid_cells,
-                    rate(s.grid_cells)
-                ));
-            }
-            eprintln!(
-                "eddy: {} steps to t = {:.4} s in {:.1} s ({}); {} frames in {}",
-                s.steps,
-                s.time,
-                s.wall_seconds,
-                sizes.join("; "),
-                s.frames,
-                s.out.display()
-            );
+            result?;
+        }
+        Command::Sweep(args) => {
+            let exe = std::env::current_exe().context("finding the eddy executable")?;
+            cli::sweep::run(&args, &exe)?;
         }
         Command::Bench(args) => eddy::bench::run(&args.into())?,
         Command::BenchGrid(args) => eddy::bench::grid::run(&args.into())?,
@@ -164,5 +150,65 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Lookup(args) => cli::abl::lookup(&args)?,
         Command::Info(args) => cli::abl::info(&args)?,
     }
+    Ok(())
+}
+
+/// `eddy run`: the plan, or the run with its summary line.
+fn run_one(
+    scene: PathBuf,
+    out: Option<PathBuf>,
+    set: Vec<String>,
+    until: Option<f64>,
+    steps: Option<u64>,
+    plan: bool,
+) -> anyhow::Result<()> {
+    let options = RunOptions {
+        out,
+        overrides: set,
+        until,
+        steps,
+        progress: std::io::stderr().is_terminal(),
+        trace: false,
+    };
+    let resolved = run::resolve(&scene, &options)?;
+    if plan {
+        let built =
+            Pipeline::build(&resolved).with_context(|| format!("building {}", scene.display()))?;
+        print!("{}", Plan::of(&built));
+        return Ok(());
+    }
+    eprintln!(
+        "eddy: running {} -> {}",
+        scene.display(),
+        run::output_dir(&resolved, &options).display()
+    );
+    let s = run::run_scene(&resolved, &options)
+        .with_context(|| format!("running {}", scene.display()))?;
+    let rate = |n: usize| s.steps as f64 * n as f64 / s.wall_seconds / 1e6;
+    let mut sizes = Vec::new();
+    if s.fluid_particles > 0 {
+        sizes.push(format!(
+            "{} fluid particles, {} boundary particles, {:.2} M fluid particle-steps/s",
+            s.fluid_particles,
+            s.boundary_particles,
+            rate(s.fluid_particles)
+        ));
+    }
+    if s.grid_cells > 0 {
+        sizes.push(format!(
+            "{} cells, {:.2} M cell-steps/s",
+            s.grid_cells,
+            rate(s.grid_cells)
+        ));
+    }
+    eprintln!(
+        "eddy: {} steps to t = {:.4} s in {:.1} s ({}); {} frames in {}",
+        s.steps,
+        s.time,
+        s.wall_seconds,
+        sizes.join("; "),
+        s.frames,
+        s.out.display()
+    );
     Ok(())
 }

@@ -3,3 +3,4 @@
 
 pub mod abl;
 pub mod bench;
+pub mod sweep;

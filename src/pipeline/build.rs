@@ -8,7 +8,7 @@ use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames};
 use super::simulation::{Simulation, StepError};
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
-    StepRecord,
+    StepRecord, TaylorGreenDecay,
 };
 use super::turbulence::{GridTurbulence, SphTurbulence};
 use super::RunError;
@@ -18,7 +18,7 @@ use crate::io::read_velocity;
 use crate::io::{AttrValue, IoError};
 use crate::metrics::Probe;
 use crate::refine;
-use crate::scene::{build, Scene};
+use crate::scene::{build, InitialFlow, Scene};
 use crate::sph::SphSolver;
 use crate::stepping::towards_end;
 use crate::{Real, Vec3};
@@ -134,6 +134,7 @@ fn grid_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<GridSolver, RunEr
     let params = build::grid_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [grid]", scene.name)))?;
     let mut solver = GridSolver::new(&params, bodies).map_err(|e| RunError::Setup(Box::new(e)))?;
+    build::set_initial_flow(scene, &mut solver).map_err(|e| RunError::Setup(Box::new(e)))?;
     if let Some(path) = scene.grid.as_ref().and_then(|g| g.static_flow.as_ref()) {
         let frame = scene.grid.as_ref().and_then(|g| g.static_flow_frame);
         let stored = read_velocity(path, frame)?;
@@ -255,9 +256,18 @@ impl Pipeline {
             }));
         }
         if sim.grid.is_some() {
+            let taylor_green = scene
+                .grid
+                .as_ref()
+                .is_some_and(|g| g.initial_flow == Some(InitialFlow::TaylorGreen))
+                .then_some(TaylorGreenDecay {
+                    nu: scene.viscosity.kinematic,
+                    initial_energy: 0.0,
+                });
             stages.push(Box::new(GridMetrics {
                 file: Kind::Grid.file("metrics.csv", both),
                 csv: None,
+                taylor_green,
             }));
         }
         let profiles = probes

@@ -257,11 +257,21 @@ const GRID_METRICS: [&str; 10] = [
     "step_seconds",
 ];
 
-/// The grid row of each step: what the step did and the kinetic energy it ended with, and what
-/// the turbulence stage did when the scene has one.
+/// The grid row of each step: what the step did and the kinetic energy it ended with, what
+/// the turbulence stage did when the scene has one, and for a Taylor–Green scene the error of
+/// the energy decay.
 pub struct GridMetrics {
     pub file: String,
     pub csv: Option<CsvSeries>,
+    pub taylor_green: Option<TaylorGreenDecay>,
+}
+
+/// The Taylor–Green vortex's energy decays as E(t) = E(0) exp(-4 nu t); the column
+/// `taylor_green_error` is |ln(E / E(t))| after each step, with E(0) the grid's own energy of
+/// the initial flow (so the sampling of the flow on the grid is not counted as error).
+pub struct TaylorGreenDecay {
+    pub nu: Real,
+    pub initial_energy: Real,
 }
 
 impl Stage for GridMetrics {
@@ -273,10 +283,15 @@ impl Stage for GridMetrics {
         (
             format!(
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
-                 change rate, stage times{}",
+                 change rate, stage times{}{}",
                 self.file,
                 grid_turbulence(sim)
-                    .map_or(String::new(), |t| format!("; {}", t.describe_columns()))
+                    .map_or(String::new(), |t| format!("; {}", t.describe_columns())),
+                if self.taylor_green.is_some() {
+                    "; Taylor-Green energy decay error |ln(E / E(0) exp(-4 nu t))|"
+                } else {
+                    ""
+                }
             ),
             Vec::new(),
         )
@@ -287,6 +302,10 @@ impl Stage for GridMetrics {
         columns.extend(GRID_METRICS.map(String::from));
         if let Some(t) = grid_turbulence(sim) {
             columns.extend(t.columns());
+        }
+        if let (Some(tg), Some(grid)) = (self.taylor_green.as_mut(), sim.grid.as_ref()) {
+            tg.initial_energy = grid.kinetic_energy();
+            columns.push("taylor_green_error".into());
         }
         self.csv = Some(CsvSeries::create(&out.join(&self.file), &columns)?);
         Ok(())
@@ -314,6 +333,10 @@ impl Stage for GridMetrics {
         ];
         if let (Some(_), Some(t)) = (grid_turbulence(sim), rec.turbulence) {
             row.extend(t.row());
+        }
+        if let Some(tg) = &self.taylor_green {
+            let exact = tg.initial_energy * (-4.0 * tg.nu * sim.grid().time()).exp();
+            row.push((energy / exact).ln().abs());
         }
         csv.row(&row)?;
         Ok(())

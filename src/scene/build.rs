@@ -5,7 +5,7 @@ use super::Scene;
 use crate::abl::AblSettings;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
-use crate::grid::GridParams;
+use crate::grid::{GridError, GridParams, GridSolver};
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
 use crate::Vec3;
@@ -48,6 +48,14 @@ pub fn sph_params(scene: &Scene) -> Option<SphParams> {
         inflows: fluid.inflow.clone(),
         outflows: fluid.outflow.clone(),
     })
+}
+
+/// Sets the scene's analytic `grid.initial_flow` on a grid built from it (nothing without one).
+pub fn set_initial_flow(scene: &Scene, grid: &mut GridSolver) -> Result<(), GridError> {
+    match scene.grid.as_ref().and_then(|g| g.initial_flow) {
+        Some(flow) => grid.set_velocity(|x| flow.velocity(x)),
+        None => Ok(()),
+    }
 }
 
 /// The MAC grid's parameters, when the scene has a `[grid]`: it covers the scene's domain.

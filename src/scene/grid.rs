@@ -41,6 +41,12 @@ pub struct Grid {
     /// Uniform velocity of the fluid at t = 0, m/s.
     #[serde(default)]
     pub initial_velocity: [Real; 3],
+    /// An analytic flow at t = 0 instead of the uniform `initial_velocity`: `taylor_green`,
+    /// u = (sin x cos y, -cos x sin y, 0) m/s with x, y in m, on a domain periodic in x and y
+    /// (2 pi wide for one period), whose kinetic energy decays as exp(-4 nu t) (what
+    /// `eddy sweep --analytic taylor-green` measures a run against).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_flow: Option<InitialFlow>,
     /// Relative residual |r| / |b| the pressure solve stops at.
     #[serde(default = "default_pressure_tolerance")]
     pub pressure_tolerance: Real,
@@ -75,6 +81,25 @@ pub struct Grid {
     /// falls below this (steady state); runs to the end when left out.
     #[serde(default)]
     pub steady_tolerance: Option<Real>,
+}
+
+/// Analytic initial flows of a grid scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InitialFlow {
+    /// The 2-D Taylor–Green vortex.
+    TaylorGreen,
+}
+
+impl InitialFlow {
+    /// The velocity at `x`, m/s.
+    pub fn velocity(self, x: &crate::Vec3) -> crate::Vec3 {
+        match self {
+            InitialFlow::TaylorGreen => {
+                crate::Vec3::new(x.x.sin() * x.y.cos(), -x.x.cos() * x.y.sin(), 0.0)
+            }
+        }
+    }
 }
 
 fn default_grid_density() -> Real {
@@ -203,6 +228,15 @@ impl Scene {
             }
         }
         let sides = grid.boundary.sides();
+        if grid.initial_flow == Some(InitialFlow::TaylorGreen)
+            && (sides[0][0] != GridSide::Periodic || sides[1][0] != GridSide::Periodic)
+        {
+            return Err(c.invalid(
+                "grid.initial_flow",
+                "\"taylor_green\"",
+                "a grid periodic in x and y (grid.boundary x_min, x_max, y_min, y_max = \"periodic\")",
+            ));
+        }
         const NAMES: [[&str; 2]; 3] = [["x_min", "x_max"], ["y_min", "y_max"], ["z_min", "z_max"]];
         for (axis, pair) in sides.iter().enumerate() {
             let periodic = [0, 1].map(|s| pair[s] == GridSide::Periodic);

@@ -13,7 +13,9 @@ pub mod validate;
 
 pub use crate::refine::Refinement;
 pub use error::{Number, SceneError};
-pub use grid::{Advection, Grid, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
+pub use grid::{
+    Advection, Grid, GridBoundary, GridSide, InitialFlow, Smoke, SmokeSource, ViscosityScheme,
+};
 pub use load::{load, parse_str};
 pub use overrides::apply_override;
 pub use schema::*;

@@ -1,0 +1,769 @@
+//! `eddy sweep`: a parameter study of one scene. Every point of the study (the product of the
+//! varied values, or with `--zip` the paired lists) is one `eddy run` in its own folder, as a
+//! child process: a point that blows up, panics or runs out of time is recorded and the study
+//! goes on, and its peak memory is its own. The rows land in `sweep.csv` (rewritten after each
+//! run, so a killed study keeps what finished); `--shard k/N` runs every N-th point into
+//! `sweep-k-of-N.csv` and `--collect` joins the shards' rows.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context};
+
+/// Options of `eddy sweep`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SweepArgs {
+    /// The scene (TOML).
+    #[arg(required_unless_present = "collect")]
+    pub scene: Option<PathBuf>,
+    /// A scene key and its values, e.g. --vary fluid.spacing=0.02,0.01 (repeatable; an array
+    /// value keeps its commas: --vary grid.resolution=[32,32,1],[64,64,1]).
+    #[arg(long, value_name = "KEY=V1,V2,...")]
+    pub vary: Vec<String>,
+    /// Pair the varied lists (all of one length) instead of taking their product.
+    #[arg(long)]
+    pub zip: bool,
+    /// A scene key held for every point, e.g. --set time.end=0.5 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Runs at once; the cores are split between them.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub jobs: u64,
+    /// Run every N-th point starting at k, into sweep-k-of-N.csv (join with --collect).
+    #[arg(long, value_name = "k/N", value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Stop a run after this many wall-clock seconds and record it as timed out.
+    #[arg(long)]
+    pub timeout: Option<f64>,
+    /// The study's folder (default: out/sweep_<scene name>); with --collect, the joined
+    /// sweep.csv (default: sweep.csv in the first folder).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Error of each run against an analytic solution eddy knows: `taylor-green` (a scene
+    /// with grid.initial_flow = "taylor_green"): the largest |ln(E / E_exact)| of the energy
+    /// decay over the run, column `error_taylor_green`.
+    #[arg(long, value_enum)]
+    pub analytic: Option<Analytic>,
+    /// A reference run's folder: each --compare column of the runs is compared with its own
+    /// (relative L2 norm over the reference's rows; see the README).
+    #[arg(long, value_name = "RUN_DIR", requires = "compare")]
+    pub reference: Option<PathBuf>,
+    /// A column compared with the reference run: metrics:NAME or probes:NAME (repeatable).
+    #[arg(long, value_name = "FILE:COLUMN", requires = "reference")]
+    pub compare: Vec<String>,
+    /// A table of published values (CSV with a `time` column) to compare --column with.
+    #[arg(long, value_name = "FILE", requires = "column")]
+    pub reference_csv: Option<PathBuf>,
+    /// The column of --reference-csv, compared with the run's metrics or probes column of
+    /// that name.
+    #[arg(long, value_name = "NAME", requires = "reference_csv")]
+    pub column: Option<String>,
+    /// Join the sweep-k-of-N.csv files of these folders into one sweep.csv.
+    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["scene", "vary", "shard"])]
+    pub collect: Vec<PathBuf>,
+}
+
+/// Analytic solutions a sweep can measure its runs against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Analytic {
+    TaylorGreen,
+}
+
+/// What each run is measured against: a column of sweep.csv each.
+#[derive(Debug, Clone)]
+enum Measure {
+    /// The largest value of a metrics column the run computes itself.
+    LargestMetric { column: &'static str },
+    /// A series of the run against the same series of a reference (time, value), from the
+    /// run's `file` (metrics or probes; None: whichever has the column).
+    Series {
+        file: Option<&'static str>,
+        column: String,
+        reference: Vec<(f64, f64)>,
+    },
+}
+
+impl Measure {
+    fn name(&self) -> String {
+        match self {
+            Measure::LargestMetric { .. } => "error_taylor_green".into(),
+            Measure::Series { column, .. } => format!("error_{column}"),
+        }
+    }
+
+    /// The error of the run in `dir`; None when it has no such series.
+    fn error(&self, dir: &Path) -> Option<f64> {
+        match self {
+            Measure::LargestMetric { column } => {
+                let values = series(&dir.join("metrics.csv"), column)?;
+                values.iter().map(|&(_, v)| v).reduce(f64::max)
+            }
+            Measure::Series {
+                file,
+                column,
+                reference,
+            } => {
+                let files = match file {
+                    Some(f) => vec![*f],
+                    None => vec!["metrics", "probes"],
+                };
+                let run = files
+                    .iter()
+                    .find_map(|f| series(&dir.join(format!("{f}.csv")), column))?;
+                relative_l2(&run, reference)
+            }
+        }
+    }
+}
+
+/// The measures `args` ask for, their references read and checked before any run.
+fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
+    let mut out = Vec::new();
+    if let Some(Analytic::TaylorGreen) = args.analytic {
+        out.push(Measure::LargestMetric {
+            column: "taylor_green_error",
+        });
+    }
+    if let Some(dir) = &args.reference {
+        for c in &args.compare {
+            let (file, column) = match c.split_once(':') {
+                Some(("metrics", col)) => ("metrics", col),
+                Some(("probes", col)) => ("probes", col),
+                _ => bail!("--compare `{c}`: expected metrics:COLUMN or probes:COLUMN"),
+            };
+            let path = dir.join(format!("{file}.csv"));
+            let reference = series(&path, column).with_context(|| {
+                format!(
+                    "--compare {c}: the reference {} has no such column",
+                    path.display()
+                )
+            })?;
+            out.push(Measure::Series {
+                file: Some(file),
+                column: column.to_string(),
+                reference,
+            });
+        }
+    }
+    if let (Some(path), Some(column)) = (&args.reference_csv, &args.column) {
+        let reference = series(path, column).with_context(|| {
+            format!(
+                "--reference-csv {}: no `time` and `{column}` columns",
+                path.display()
+            )
+        })?;
+        out.push(Measure::Series {
+            file: None,
+            column: column.clone(),
+            reference,
+        });
+    }
+    Ok(out)
+}
+
+/// (time, value) of `column` of a CSV with a `time` column; None when either is missing.
+fn series(path: &Path, column: &str) -> Option<Vec<(f64, f64)>> {
+    let mut reader = csv::Reader::from_path(path).ok()?;
+    let header = reader.headers().ok()?.clone();
+    let t = header.iter().position(|h| h == "time")?;
+    let c = header.iter().position(|h| h == column)?;
+    Some(
+        reader
+            .records()
+            .filter_map(Result::ok)
+            .filter_map(|r| Some((r.get(t)?.parse().ok()?, r.get(c)?.parse().ok()?)))
+            .collect(),
+    )
+}
+
+/// sqrt(sum (a(t_k) - r_k)^2 / sum r_k^2) over the reference rows (t_k, r_k) inside the run's
+/// time span, with a(t) the run's series interpolated linearly; None when none overlap.
+fn relative_l2(run: &[(f64, f64)], reference: &[(f64, f64)]) -> Option<f64> {
+    let (first, last) = (run.first()?.0, run.last()?.0);
+    let (mut num, mut den, mut n) = (0.0, 0.0, 0);
+    for &(t, r) in reference.iter().filter(|(t, _)| *t >= first && *t <= last) {
+        let i = run.partition_point(|(s, _)| *s < t);
+        let a = match (i.checked_sub(1).map(|j| run[j]), run.get(i)) {
+            (_, Some(&(s, v))) if s == t => v,
+            (Some((s0, v0)), Some(&(s1, v1))) => v0 + (v1 - v0) * (t - s0) / (s1 - s0),
+            (Some((_, v)), None) | (None, Some(&(_, v))) => v,
+            (None, None) => return None,
+        };
+        num += (a - r) * (a - r);
+        den += r * r;
+        n += 1;
+    }
+    (n > 0).then(|| {
+        if den > 0.0 {
+            (num / den).sqrt()
+        } else {
+            num.sqrt()
+        }
+    })
+}
+
+/// Parses `k/N`.
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (k, n) = s.split_once('/').ok_or("expected k/N, e.g. 0/4")?;
+    let k: usize = k.trim().parse().map_err(|e| format!("shard `{k}`: {e}"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|e| format!("shard count `{n}`: {e}"))?;
+    if n == 0 || k >= n {
+        return Err(format!("shard {k}/{n}: need 0 <= k < N"));
+    }
+    Ok((k, n))
+}
+
+/// One varied key and its values, as given.
+#[derive(Debug, Clone, PartialEq)]
+struct Axis {
+    key: String,
+    values: Vec<String>,
+}
+
+/// `KEY=V1,V2,...`, split at the commas outside brackets and quotes.
+fn parse_vary(s: &str) -> anyhow::Result<Axis> {
+    let (key, list) = s
+        .split_once('=')
+        .with_context(|| format!("--vary `{s}`: expected KEY=V1,V2,..."))?;
+    let key = key.trim();
+    if key.is_empty() {
+        bail!("--vary `{s}`: the key is empty");
+    }
+    let (mut values, mut depth, mut quoted, mut start) = (Vec::new(), 0i32, false, 0);
+    for (i, c) in list.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            '[' | '{' if !quoted => depth += 1,
+            ']' | '}' if !quoted => depth -= 1,
+            ',' if !quoted && depth == 0 => {
+                values.push(list[start..i].trim().to_string());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    values.push(list[start..].trim().to_string());
+    if let Some(i) = values.iter().position(String::is_empty) {
+        bail!("--vary `{s}`: value {} is empty", i + 1);
+    }
+    Ok(Axis {
+        key: key.to_string(),
+        values,
+    })
+}
+
+/// The points of the study: for each, its value of every axis.
+fn points(axes: &[Axis], zip: bool) -> anyhow::Result<Vec<Vec<String>>> {
+    if axes.is_empty() {
+        return Ok(vec![Vec::new()]);
+    }
+    if zip {
+        let n = axes[0].values.len();
+        if let Some(a) = axes.iter().find(|a| a.values.len() != n) {
+            bail!(
+                "--zip pairs lists of one length: {} has {n} values, {} has {}",
+                axes[0].key,
+                a.key,
+                a.values.len()
+            );
+        }
+        return Ok((0..n)
+            .map(|i| axes.iter().map(|a| a.values[i].clone()).collect())
+            .collect());
+    }
+    Ok(axes.iter().fold(vec![Vec::new()], |acc, a| {
+        acc.iter()
+            .flat_map(|p| {
+                a.values.iter().map(move |v| {
+                    let mut p = p.clone();
+                    p.push(v.clone());
+                    p
+                })
+            })
+            .collect()
+    }))
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    Finished,
+    /// The solver stopped on an instability (its cause is in the row).
+    Unstable,
+    /// Any other error (the scene could not be built, a file could not be written).
+    Failed,
+    TimedOut,
+}
+
+impl Status {
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Finished => "finished",
+            Status::Unstable => "unstable",
+            Status::Failed => "failed",
+            Status::TimedOut => "timed out",
+        }
+    }
+}
+
+/// What `eddy run --status FILE` writes when the run ends: how, why, and the process's peak
+/// resident memory.
+pub fn write_status(path: &Path, status: Status, cause: &str) -> anyhow::Result<()> {
+    let mut t = toml::Table::new();
+    t.insert("status".into(), status.name().into());
+    t.insert("cause".into(), cause.into());
+    if let Some(bytes) = peak_memory() {
+        t.insert("peak_memory_bytes".into(), (bytes as i64).into());
+    }
+    let text = toml::to_string(&t)?;
+    eddy::io::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    Ok(())
+}
+
+/// Peak resident memory of this process (Linux: VmHWM), bytes.
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// One row of sweep.csv.
+#[derive(Debug, Clone)]
+struct Row {
+    index: usize,
+    values: Vec<String>,
+    status: Status,
+    cause: String,
+    steps: Option<u64>,
+    time: Option<f64>,
+    wall_seconds: f64,
+    peak_memory_mib: Option<f64>,
+    /// One per measure, in the order of the study's measures.
+    errors: Vec<Option<f64>>,
+}
+
+/// The fixed columns after the varied keys (the error columns come before `folder`).
+const COLUMNS: [&str; 7] = [
+    "status",
+    "cause",
+    "steps",
+    "end_time",
+    "wall_seconds",
+    "peak_memory_mib",
+    "folder",
+];
+
+fn run_folder(index: usize) -> String {
+    format!("run_{index:04}")
+}
+
+impl Row {
+    fn record(&self) -> Vec<String> {
+        let mut r = vec![self.index.to_string()];
+        r.extend(self.values.iter().cloned());
+        r.extend([
+            self.status.name().to_string(),
+            self.cause.clone(),
+            self.steps.map_or(String::new(), |s| s.to_string()),
+            self.time.map_or(String::new(), |t| format!("{t}")),
+            format!("{:.3}", self.wall_seconds),
+            self.peak_memory_mib
+                .map_or(String::new(), |m| format!("{m:.1}")),
+        ]);
+        r.extend(
+            self.errors
+                .iter()
+                .map(|e| e.map_or(String::new(), |e| format!("{e:e}"))),
+        );
+        r.push(run_folder(self.index));
+        r
+    }
+}
+
+/// Writes the header and `rows` (in point order) to `path`, atomically.
+fn write_rows(path: &Path, keys: &[String], errors: &[String], rows: &[Row]) -> anyhow::Result<()> {
+    let mut header = vec!["point".to_string()];
+    header.extend(keys.iter().cloned());
+    let (fixed, folder) = COLUMNS.split_at(COLUMNS.len() - 1);
+    header.extend(fixed.iter().map(|c| c.to_string()));
+    header.extend(errors.iter().cloned());
+    header.extend(folder.iter().map(|c| c.to_string()));
+    let mut sorted: Vec<&Row> = rows.iter().collect();
+    sorted.sort_by_key(|r| r.index);
+    let mut records = vec![header];
+    records.extend(sorted.iter().map(|r| r.record()));
+    write_records(path, &records)
+}
+
+fn write_records(path: &Path, records: &[Vec<String>]) -> anyhow::Result<()> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in records {
+        w.write_record(r)?;
+    }
+    let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
+    eddy::io::write_atomic(path, |out| out.write_all(&bytes))?;
+    Ok(())
+}
+
+/// Runs `eddy sweep`; `exe` is the `eddy` binary the points run with.
+pub fn run(args: &SweepArgs, exe: &Path) -> anyhow::Result<()> {
+    if !args.collect.is_empty() {
+        let out = args
+            .out
+            .clone()
+            .unwrap_or_else(|| args.collect[0].join("sweep.csv"));
+        let n = collect(&args.collect, &out)?;
+        eprintln!("eddy: {n} rows -> {}", out.display());
+        return Ok(());
+    }
+    let scene_path = args.scene.as_ref().context("give the scene to sweep")?;
+    let axes: Vec<Axis> = args
+        .vary
+        .iter()
+        .map(|v| parse_vary(v))
+        .collect::<anyhow::Result<_>>()?;
+    for (i, a) in axes.iter().enumerate() {
+        if axes[..i].iter().any(|b| b.key == a.key) {
+            bail!("--vary {} is given twice", a.key);
+        }
+    }
+    let all = points(&axes, args.zip)?;
+    let measures = measures(args)?;
+    let error_names: Vec<String> = measures.iter().map(Measure::name).collect();
+    // Every point's scene is loaded and validated before any run starts: a bad key or value
+    // stops the study here, naming the point.
+    let mut name = String::new();
+    for (i, values) in all.iter().enumerate() {
+        let scene = eddy::scene::load(scene_path, &overrides(&args.set, &axes, values))
+            .with_context(|| format!("point {i} ({})", describe(&axes, values)))?;
+        name = scene.name;
+    }
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("sweep_{name}")));
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let (k, n) = args.shard.unwrap_or((0, 1));
+    let mine: Vec<usize> = (0..all.len()).filter(|i| i % n == k).collect();
+    let csv_path = match args.shard {
+        Some((k, n)) => out.join(format!("sweep-{k}-of-{n}.csv")),
+        None => out.join("sweep.csv"),
+    };
+    let keys: Vec<String> = axes.iter().map(|a| a.key.clone()).collect();
+    let jobs = (args.jobs as usize).min(mine.len()).max(1);
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let threads = (cores / jobs).max(1);
+    eprintln!(
+        "eddy: sweeping {} over {} points ({} here), {jobs} at once with {threads} threads each \
+         -> {}",
+        scene_path.display(),
+        all.len(),
+        mine.len(),
+        out.display()
+    );
+    let bar = progress_bar(mine.len() as u64);
+    let rows: Mutex<Vec<Row>> = Mutex::new(Vec::new());
+    let next = AtomicUsize::new(0);
+    let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| {
+                while let Some(&index) = mine.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let point = Point {
+                        index,
+                        values: &all[index],
+                        overrides: overrides(&args.set, &axes, &all[index]),
+                    };
+                    let result = run_point(exe, scene_path, &out, &point, threads, args.timeout)
+                        .and_then(|mut row| {
+                            let dir = out.join(run_folder(index));
+                            row.errors = measures.iter().map(|m| m.error(&dir)).collect();
+                            bar.set_message(format!("point {index}: {}", row.status.name()));
+                            let mut rows = rows.lock().unwrap_or_else(|p| p.into_inner());
+                            rows.push(row);
+                            write_rows(&csv_path, &keys, &error_names, &rows)
+                        });
+                    bar.inc(1);
+                    if let Err(e) = result {
+                        failure
+                            .lock()
+                            .unwrap_or_else(|p| p.into_inner())
+                            .get_or_insert(e);
+                        return;
+                    }
+                }
+            });
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
+    let rows = rows.into_inner().unwrap_or_else(|p| p.into_inner());
+    write_rows(&csv_path, &keys, &error_names, &rows)?;
+    let count = |s: Status| rows.iter().filter(|r| r.status == s).count();
+    eprintln!(
+        "eddy: {} finished, {} unstable, {} failed, {} timed out -> {}",
+        count(Status::Finished),
+        count(Status::Unstable),
+        count(Status::Failed),
+        count(Status::TimedOut),
+        csv_path.display()
+    );
+    Ok(())
+}
+
+/// The overrides of a point: the held keys, then its varied values.
+fn overrides(set: &[String], axes: &[Axis], values: &[String]) -> Vec<String> {
+    let mut o = set.to_vec();
+    o.extend(
+        axes.iter()
+            .zip(values)
+            .map(|(a, v)| format!("{}={v}", a.key)),
+    );
+    o
+}
+
+fn describe(axes: &[Axis], values: &[String]) -> String {
+    axes.iter()
+        .zip(values)
+        .map(|(a, v)| format!("{}={v}", a.key))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+struct Point<'a> {
+    index: usize,
+    values: &'a [String],
+    overrides: Vec<String>,
+}
+
+/// Runs one point as `eddy run` in its folder and reads how it ended.
+fn run_point(
+    exe: &Path,
+    scene: &Path,
+    out: &Path,
+    point: &Point,
+    threads: usize,
+    timeout: Option<f64>,
+) -> anyhow::Result<Row> {
+    let dir = out.join(run_folder(point.index));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let status_file = dir.join("status.toml");
+    let _ = std::fs::remove_file(&status_file);
+    let log = std::fs::File::create(dir.join("log.txt"))
+        .with_context(|| format!("creating the log in {}", dir.display()))?;
+    let mut command = Command::new(exe);
+    command
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(&dir)
+        .arg("--status")
+        .arg(&status_file)
+        .env("RAYON_NUM_THREADS", threads.to_string())
+        .stdout(Stdio::null())
+        .stderr(log);
+    for o in &point.overrides {
+        command.arg("--set").arg(o);
+    }
+    let started = Instant::now();
+    let mut child = command
+        .spawn()
+        .with_context(|| format!("starting {}", exe.display()))?;
+    let mut timed_out = false;
+    loop {
+        if child.try_wait()?.is_some() {
+            break;
+        }
+        if timeout.is_some_and(|t| started.elapsed().as_secs_f64() > t) {
+            child.kill()?;
+            child.wait()?;
+            timed_out = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let report: Option<toml::Table> = std::fs::read_to_string(&status_file)
+        .ok()
+        .and_then(|t| t.parse().ok());
+    let field = |k: &str| report.as_ref().and_then(|r| r.get(k));
+    let (status, cause) = if timed_out {
+        (
+            Status::TimedOut,
+            format!("stopped after {:.0} s", timeout.unwrap_or_default()),
+        )
+    } else {
+        let status = match field("status").and_then(|s| s.as_str()) {
+            Some("finished") => Status::Finished,
+            Some("unstable") => Status::Unstable,
+            _ => Status::Failed,
+        };
+        let cause = field("cause")
+            .and_then(|c| c.as_str())
+            .map(String::from)
+            .unwrap_or_else(|| "the run ended without a status (see log.txt)".into());
+        (status, cause)
+    };
+    let (steps, time) = last_metrics(&dir.join("metrics.csv"));
+    Ok(Row {
+        index: point.index,
+        values: point.values.to_vec(),
+        status,
+        cause,
+        steps,
+        time,
+        wall_seconds,
+        peak_memory_mib: field("peak_memory_bytes")
+            .and_then(|b| b.as_integer())
+            .map(|b| b as f64 / (1024.0 * 1024.0)),
+        errors: Vec::new(),
+    })
+}
+
+/// The step and time of the last row of a run's metrics.csv.
+fn last_metrics(path: &Path) -> (Option<u64>, Option<f64>) {
+    let Ok(mut reader) = csv::Reader::from_path(path) else {
+        return (None, None);
+    };
+    let Ok(header) = reader.headers().cloned() else {
+        return (None, None);
+    };
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let (Some(step), Some(time)) = (col("step"), col("time")) else {
+        return (None, None);
+    };
+    let Some(last) = reader.records().filter_map(Result::ok).last() else {
+        return (None, None);
+    };
+    (
+        last.get(step).and_then(|s| s.parse().ok()),
+        last.get(time).and_then(|t| t.parse().ok()),
+    )
+}
+
+fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} runs, {elapsed} elapsed, ~{eta} left, {msg}",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Joins the rows of the `sweep-k-of-N.csv` files in `dirs` into `out`: every shard 0..N
+/// present once, one header for all, no point twice. Returns the number of rows.
+fn collect(dirs: &[PathBuf], out: &Path) -> anyhow::Result<usize> {
+    let mut shards: BTreeMap<usize, PathBuf> = BTreeMap::new();
+    let mut count = None;
+    for dir in dirs {
+        let entries =
+            std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))?;
+        for entry in entries {
+            let path = entry?.path();
+            let Some((k, n)) = path
+                .file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.strip_prefix("sweep-")?.strip_suffix(".csv"))
+                .and_then(|kn| {
+                    let (k, n) = kn.split_once("-of-")?;
+                    Some((k.parse::<usize>().ok()?, n.parse::<usize>().ok()?))
+                })
+            else {
+                continue;
+            };
+            if *count.get_or_insert(n) != n {
+                bail!(
+                    "{} belongs to a study in {n} shards, the others to one in {}",
+                    path.display(),
+                    count.unwrap_or(n)
+                );
+            }
+            if let Some(other) = shards.insert(k, path.clone()) {
+                bail!(
+                    "shard {k} is there twice: {} and {}",
+                    other.display(),
+                    path.display()
+                );
+            }
+        }
+    }
+    let n = count.context("no sweep-k-of-N.csv in the folders given")?;
+    if let Some(k) = (0..n).find(|k| !shards.contains_key(k)) {
+        bail!("shard {k} of {n} is missing: run it with --shard {k}/{n}");
+    }
+    let mut header: Option<csv::StringRecord> = None;
+    let mut rows: BTreeMap<usize, Vec<String>> = BTreeMap::new();
+    for path in shards.values() {
+        let mut reader =
+            csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+        let h = reader.headers()?.clone();
+        if header.get_or_insert_with(|| h.clone()) != &h {
+            bail!("{} has other columns than the first shard", path.display());
+        }
+        for record in reader.records() {
+            let record = record.with_context(|| format!("reading {}", path.display()))?;
+            let index: usize = record
+                .get(0)
+                .and_then(|s| s.parse().ok())
+                .with_context(|| format!("{}: a row without a point number", path.display()))?;
+            if rows
+                .insert(index, record.iter().map(String::from).collect())
+                .is_some()
+            {
+                bail!("point {index} is in two shards");
+            }
+        }
+    }
+    let mut records = vec![header
+        .map(|h| h.iter().map(String::from).collect())
+        .unwrap_or_default()];
+    let n_rows = rows.len();
+    records.extend(rows.into_values());
+    write_records(out, &records)?;
+    Ok(n_rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vary_lists_split_outside_brackets_and_quotes() {
+        let a = parse_vary("grid.resolution=[32,32,1],[64,64,1]").expect("parses");
+        assert_eq!(a.values, ["[32,32,1]", "[64,64,1]"]);
+        let a = parse_vary("name=\"a,b\",c").expect("parses");
+        assert_eq!(a.values, ["\"a,b\"", "c"]);
+        assert!(parse_vary("fluid.spacing").is_err());
+        assert!(parse_vary("fluid.spacing=0.1,,0.2").is_err());
+    }
+
+    #[test]
+    fn points_are_the_product_or_the_pairs() {
+        let axes = [
+            parse_vary("a=1,2").expect("parses"),
+            parse_vary("b=x,y,z").expect("parses"),
+        ];
+        let p = points(&axes, false).expect("product");
+        assert_eq!(p.len(), 6);
+        assert_eq!(p[0], ["1", "x"]);
+        assert_eq!(p[5], ["2", "z"]);
+        assert!(points(&axes, true).is_err(), "lists of unequal length");
+        let zipped = points(&axes[..1], true).expect("one axis");
+        assert_eq!(zipped, [["1"], ["2"]]);
+    }
+}

@@ -49,6 +49,9 @@ enum Command {
     /// A parameter study of a scene: one run per point of the varied values, each in its own
     /// folder, and a sweep.csv with how each ended, its steps, wall time and peak memory.
     Sweep(cli::sweep::SweepArgs),
+    /// Plot two columns of a sweep.csv against each other (log-log by default), one curve per
+    /// value of a column: error against wall time, one curve per method.
+    PlotSweep(cli::sweep::PlotArgs),
     /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
     Bench(cli::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
@@ -128,6 +131,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             let exe = std::env::current_exe().context("finding the eddy executable")?;
             cli::sweep::run(&args, &exe)?;
         }
+        Command::PlotSweep(args) => cli::sweep::plot(&args)?,
         Command::Bench(args) => eddy::bench::run(&args.into())?,
         Command::BenchGrid(args) => eddy::bench::grid::run(&args.into())?,
         Command::BenchAbl(args) => {

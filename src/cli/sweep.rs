@@ -1,5 +1,5 @@
 //! `eddy sweep`: a parameter study of one scene. Every point of the study (the product of the
-//! varied values, or with `--zip` the paired lists) is one `eddy run` in its own folder, as a
+//! varied values, `--zip` pairing lists) is one `eddy run` in its own folder, as a
 //! child process: a point that blows up, panics or runs out of time is recorded and the study
 //! goes on, and its peak memory is its own. The rows land in `sweep.csv` (rewritten after each
 //! run, so a killed study keeps what finished); `--shard k/N` runs every N-th point into
@@ -25,9 +25,11 @@ pub struct SweepArgs {
     /// value keeps its commas: --vary grid.resolution=[32,32,1],[64,64,1]).
     #[arg(long, value_name = "KEY=V1,V2,...")]
     pub vary: Vec<String>,
-    /// Pair the varied lists (all of one length) instead of taking their product.
-    #[arg(long)]
-    pub zip: bool,
+    /// Pair varied lists of one length instead of taking their product: all of them, or only
+    /// the keys given (--zip grid.resolution,domain.max), which then vary together while the
+    /// product runs over them and the other keys.
+    #[arg(long, num_args = 0.., value_delimiter = ',', value_name = "KEYS")]
+    pub zip: Option<Vec<String>>,
     /// A scene key held for every point, e.g. --set time.end=0.5 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -63,9 +65,101 @@ pub struct SweepArgs {
     /// that name.
     #[arg(long, value_name = "NAME", requires = "reference_csv")]
     pub column: Option<String>,
+    /// Stability study: run each point long (up to --stress-steps steps, or the scene's end if
+    /// that comes first), count energy growth beyond --energy-growth over its running minimum
+    /// as unstable too, and report the largest stable value of each varied key
+    /// (stability.csv).
+    #[arg(long)]
+    pub stress: bool,
+    /// Steps of a --stress run.
+    #[arg(long, default_value_t = 10_000, requires = "stress")]
+    pub stress_steps: u64,
+    /// With --stress: a run whose energy (total_energy of SPH metrics, else kinetic_energy)
+    /// exceeds this factor times its running minimum is unstable; 0 turns the check off
+    /// (for a grid that starts at rest and is driven, whose energy grows by design).
+    #[arg(long, default_value_t = 10.0, requires = "stress")]
+    pub energy_growth: f64,
     /// Join the sweep-k-of-N.csv files of these folders into one sweep.csv.
     #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["scene", "vary", "shard"])]
     pub collect: Vec<PathBuf>,
+}
+
+/// Options of `eddy plot-sweep`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PlotArgs {
+    /// A sweep.csv.
+    pub sweep: PathBuf,
+    /// The column along x (e.g. wall_seconds).
+    #[arg(long)]
+    pub x: String,
+    /// The column along y (e.g. error_taylor_green).
+    #[arg(long)]
+    pub y: String,
+    /// One curve per value of these columns (e.g. varied keys: one curve per method); one
+    /// curve when left out.
+    #[arg(long, value_delimiter = ',')]
+    pub by: Vec<String>,
+    /// Linear axes instead of log-log.
+    #[arg(long)]
+    pub linear: bool,
+    /// The PNG to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `eddy plot-sweep`: y against x of a sweep's rows, a curve per value of `by`, the points of
+/// a curve in order of x; rows without a number in either column are left out.
+pub fn plot(args: &PlotArgs) -> anyhow::Result<()> {
+    let mut reader = csv::Reader::from_path(&args.sweep)
+        .with_context(|| format!("reading {}", args.sweep.display()))?;
+    let header = reader.headers()?.clone();
+    let col = |name: &str| {
+        header.iter().position(|h| h == name).with_context(|| {
+            format!(
+                "{} has no column `{name}` (it has: {})",
+                args.sweep.display(),
+                header.iter().collect::<Vec<_>>().join(", ")
+            )
+        })
+    };
+    let (x, y) = (col(&args.x)?, col(&args.y)?);
+    let by: Vec<(usize, &String)> = args
+        .by
+        .iter()
+        .map(|name| Ok((col(name)?, name)))
+        .collect::<anyhow::Result<_>>()?;
+    let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for record in reader.records() {
+        let r = record?;
+        let (Some(px), Some(py)) = (
+            r.get(x).and_then(|v| v.parse::<f64>().ok()),
+            r.get(y).and_then(|v| v.parse::<f64>().ok()),
+        ) else {
+            continue;
+        };
+        let label = if by.is_empty() {
+            args.y.clone()
+        } else {
+            by.iter()
+                .map(|&(c, name)| format!("{name} = {}", r.get(c).unwrap_or_default()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        match curves.iter_mut().find(|(l, _)| *l == label) {
+            Some((_, c)) => c.push((px, py)),
+            None => curves.push((label, vec![(px, py)])),
+        }
+    }
+    for (_, c) in &mut curves {
+        c.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let left_out =
+        eddy::io::plot::study_figure(&args.out, (&args.x, &args.y), &curves, !args.linear)?;
+    if left_out > 0 {
+        eprintln!("eddy: left out {left_out} points a log axis cannot show (use --linear)");
+    }
+    eprintln!("eddy: wrote {}", args.out.display());
+    Ok(())
 }
 
 /// Analytic solutions a sweep can measure its runs against.
@@ -260,36 +354,64 @@ fn parse_vary(s: &str) -> anyhow::Result<Axis> {
     })
 }
 
-/// The points of the study: for each, its value of every axis.
-fn points(axes: &[Axis], zip: bool) -> anyhow::Result<Vec<Vec<String>>> {
-    if axes.is_empty() {
-        return Ok(vec![Vec::new()]);
+/// The points of the study: for each, its value of every axis (in the order given). The
+/// axes in `zip` (all of them for an empty list) vary together, as one axis; the product runs
+/// over that one and the others.
+fn points(axes: &[Axis], zip: Option<&[String]>) -> anyhow::Result<Vec<Vec<String>>> {
+    let zipped = |a: &Axis| zip.is_some_and(|z| z.is_empty() || z.contains(&a.key));
+    if let Some(key) = zip
+        .unwrap_or_default()
+        .iter()
+        .find(|k| !axes.iter().any(|a| &a.key == *k))
+    {
+        bail!("--zip {key}: not a --vary key");
     }
-    if zip {
-        let n = axes[0].values.len();
-        if let Some(a) = axes.iter().find(|a| a.values.len() != n) {
-            bail!(
-                "--zip pairs lists of one length: {} has {n} values, {} has {}",
-                axes[0].key,
-                a.key,
-                a.values.len()
+    // Each slot is a list of choices; a choice sets some axes (by index) to values.
+    let mut slots: Vec<Vec<Vec<(usize, String)>>> = Vec::new();
+    let group: Vec<usize> = (0..axes.len()).filter(|&i| zipped(&axes[i])).collect();
+    for (i, a) in axes.iter().enumerate() {
+        if group.first() == Some(&i) {
+            let n = a.values.len();
+            if let Some(&j) = group.iter().find(|&&j| axes[j].values.len() != n) {
+                bail!(
+                    "--zip pairs lists of one length: {} has {n} values, {} has {}",
+                    a.key,
+                    axes[j].key,
+                    axes[j].values.len()
+                );
+            }
+            slots.push(
+                (0..n)
+                    .map(|k| {
+                        group
+                            .iter()
+                            .map(|&j| (j, axes[j].values[k].clone()))
+                            .collect()
+                    })
+                    .collect(),
             );
+        } else if !group.contains(&i) {
+            slots.push(a.values.iter().map(|v| vec![(i, v.clone())]).collect());
         }
-        return Ok((0..n)
-            .map(|i| axes.iter().map(|a| a.values[i].clone()).collect())
-            .collect());
     }
-    Ok(axes.iter().fold(vec![Vec::new()], |acc, a| {
+    let choices = slots.iter().fold(vec![Vec::new()], |acc, slot| {
         acc.iter()
-            .flat_map(|p| {
-                a.values.iter().map(move |v| {
+            .flat_map(|p: &Vec<(usize, String)>| {
+                slot.iter().map(move |c| {
                     let mut p = p.clone();
-                    p.push(v.clone());
+                    p.extend(c.iter().cloned());
                     p
                 })
             })
             .collect()
-    }))
+    });
+    Ok(choices
+        .into_iter()
+        .map(|mut c| {
+            c.sort_by_key(|(i, _)| *i);
+            c.into_iter().map(|(_, v)| v).collect()
+        })
+        .collect())
 }
 
 /// How a run ended.
@@ -436,7 +558,7 @@ pub fn run(args: &SweepArgs, exe: &Path) -> anyhow::Result<()> {
             bail!("--vary {} is given twice", a.key);
         }
     }
-    let all = points(&axes, args.zip)?;
+    let all = points(&axes, args.zip.as_deref())?;
     let measures = measures(args)?;
     let error_names: Vec<String> = measures.iter().map(Measure::name).collect();
     // Every point's scene is loaded and validated before any run starts: a bad key or value
@@ -482,11 +604,15 @@ pub fn run(args: &SweepArgs, exe: &Path) -> anyhow::Result<()> {
                         index,
                         values: &all[index],
                         overrides: overrides(&args.set, &axes, &all[index]),
+                        steps: args.stress.then_some(args.stress_steps),
                     };
                     let result = run_point(exe, scene_path, &out, &point, threads, args.timeout)
                         .and_then(|mut row| {
                             let dir = out.join(run_folder(index));
                             row.errors = measures.iter().map(|m| m.error(&dir)).collect();
+                            if args.stress && args.energy_growth > 0.0 {
+                                flag_energy_growth(&mut row, &dir, args.energy_growth);
+                            }
                             bar.set_message(format!("point {index}: {}", row.status.name()));
                             let mut rows = rows.lock().unwrap_or_else(|p| p.into_inner());
                             rows.push(row);
@@ -510,6 +636,22 @@ pub fn run(args: &SweepArgs, exe: &Path) -> anyhow::Result<()> {
     }
     let rows = rows.into_inner().unwrap_or_else(|p| p.into_inner());
     write_rows(&csv_path, &keys, &error_names, &rows)?;
+    if args.stress {
+        let path = out.join(match args.shard {
+            Some((k, n)) => format!("stability-{k}-of-{n}.csv"),
+            None => "stability.csv".into(),
+        });
+        let report = stability(&axes, &rows);
+        for r in &report[1..] {
+            eprintln!(
+                "eddy: {}: largest stable {}, smallest unstable {}",
+                r[0],
+                if r[1].is_empty() { "none" } else { &r[1] },
+                if r[2].is_empty() { "none" } else { &r[2] }
+            );
+        }
+        write_records(&path, &report)?;
+    }
     let count = |s: Status| rows.iter().filter(|r| r.status == s).count();
     eprintln!(
         "eddy: {} finished, {} unstable, {} failed, {} timed out -> {}",
@@ -545,6 +687,8 @@ struct Point<'a> {
     index: usize,
     values: &'a [String],
     overrides: Vec<String>,
+    /// `eddy run --steps`: the step cap of a stress run.
+    steps: Option<u64>,
 }
 
 /// Runs one point as `eddy run` in its folder and reads how it ended.
@@ -575,6 +719,10 @@ fn run_point(
         .stderr(log);
     for o in &point.overrides {
         command.arg("--set").arg(o);
+    }
+    if let Some(steps) = point.steps {
+        // A stress run goes on to its step cap unless the scene's end comes first.
+        command.arg("--steps").arg(steps.to_string());
     }
     let started = Instant::now();
     let mut child = command
@@ -629,6 +777,68 @@ fn run_point(
             .map(|b| b as f64 / (1024.0 * 1024.0)),
         errors: Vec::new(),
     })
+}
+
+/// Marks a finished run unstable when its energy grew beyond `factor` times its running
+/// minimum (a blow-up that has not reached NaN yet): the energy is the metrics' total_energy
+/// (SPH: kinetic, potential and rotational), else kinetic_energy (grid). A running minimum of
+/// zero (a run that starts at rest) is not a base for a factor and is skipped.
+fn flag_energy_growth(row: &mut Row, dir: &Path, factor: f64) {
+    if row.status != Status::Finished {
+        return;
+    }
+    let path = dir.join("metrics.csv");
+    let Some(energy) = series(&path, "total_energy").or_else(|| series(&path, "kinetic_energy"))
+    else {
+        return;
+    };
+    let mut least = f64::INFINITY;
+    for (t, e) in energy {
+        least = least.min(e);
+        if least > 0.0 && e > factor * least {
+            row.status = Status::Unstable;
+            row.cause = format!(
+                "energy {e:.4e} at t = {t:.6} s is more than {factor} times its running minimum \
+                 {least:.4e}"
+            );
+            return;
+        }
+    }
+}
+
+/// Per varied key: the largest value at which every point was stable (finished) and the
+/// smallest at which one was not, numerically when the values are numbers (else in the order
+/// given). Rows: key, largest stable, smallest unstable.
+fn stability(axes: &[Axis], rows: &[Row]) -> Vec<Vec<String>> {
+    let mut out = vec![vec![
+        "key".to_string(),
+        "largest_stable".into(),
+        "smallest_unstable".into(),
+    ]];
+    for (k, axis) in axes.iter().enumerate() {
+        let rank = |v: &str| -> f64 {
+            v.parse::<f64>()
+                .unwrap_or_else(|_| axis.values.iter().position(|x| x == v).unwrap_or(0) as f64)
+        };
+        let stable_at = |v: &String| {
+            let mine: Vec<&Row> = rows.iter().filter(|r| &r.values[k] == v).collect();
+            !mine.is_empty() && mine.iter().all(|r| r.status == Status::Finished)
+        };
+        let tried = |v: &String| rows.iter().any(|r| &r.values[k] == v);
+        let by_rank = |a: &&String, b: &&String| rank(a).total_cmp(&rank(b));
+        let stable = axis.values.iter().filter(|v| stable_at(v)).max_by(by_rank);
+        let unstable = axis
+            .values
+            .iter()
+            .filter(|v| tried(v) && !stable_at(v))
+            .min_by(by_rank);
+        out.push(vec![
+            axis.key.clone(),
+            stable.cloned().unwrap_or_default(),
+            unstable.cloned().unwrap_or_default(),
+        ]);
+    }
+    out
 }
 
 /// The step and time of the last row of a run's metrics.csv.
@@ -758,12 +968,33 @@ mod tests {
             parse_vary("a=1,2").expect("parses"),
             parse_vary("b=x,y,z").expect("parses"),
         ];
-        let p = points(&axes, false).expect("product");
+        let p = points(&axes, None).expect("product");
         assert_eq!(p.len(), 6);
         assert_eq!(p[0], ["1", "x"]);
         assert_eq!(p[5], ["2", "z"]);
-        assert!(points(&axes, true).is_err(), "lists of unequal length");
-        let zipped = points(&axes[..1], true).expect("one axis");
+        assert!(points(&axes, Some(&[])).is_err(), "lists of unequal length");
+        let zipped = points(&axes[..1], Some(&[])).expect("one axis");
         assert_eq!(zipped, [["1"], ["2"]]);
+        // Two keys paired, the product over that pair and a third key.
+        let axes = [
+            parse_vary("n=32,64").expect("parses"),
+            parse_vary("m=x,y").expect("parses"),
+            parse_vary("depth=0.2,0.1").expect("parses"),
+        ];
+        let keys = ["n".to_string(), "depth".to_string()];
+        let p = points(&axes, Some(&keys)).expect("group");
+        assert_eq!(
+            p,
+            [
+                ["32", "x", "0.2"],
+                ["32", "y", "0.2"],
+                ["64", "x", "0.1"],
+                ["64", "y", "0.1"]
+            ]
+        );
+        assert!(
+            points(&axes, Some(&["q".to_string()])).is_err(),
+            "not a varied key"
+        );
     }
 }

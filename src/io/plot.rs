@@ -357,3 +357,105 @@ pub fn error_figure(
         Ok(())
     })
 }
+
+/// Curves of a parameter study, `y` against `x` (log-log, or linear axes with `log = false`),
+/// one per group with a marker at each run, into the PNG `out` (written under a temporary name
+/// and renamed). Points that a log axis cannot show (zero, negative, not finite) are left out
+/// and counted in the result.
+pub fn study_figure(
+    out: &Path,
+    labels: (&str, &str),
+    curves: &[(String, Vec<(Real, Real)>)],
+    log: bool,
+) -> Result<usize, IoError> {
+    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    let shown =
+        |p: &(Real, Real)| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0));
+    let kept: Vec<(String, Vec<(Real, Real)>)> = curves
+        .iter()
+        .map(|(l, c)| (l.clone(), c.iter().copied().filter(shown).collect()))
+        .collect();
+    let left_out = curves.iter().map(|(_, c)| c.len()).sum::<usize>()
+        - kept.iter().map(|(_, c)| c.len()).sum::<usize>();
+    let all = || kept.iter().flat_map(|(_, c)| c.iter());
+    let (x0, x1) = all().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (y0, y1) = all().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    if !(x1 >= x0 && y1 >= y0) {
+        return Err(IoError::invalid(out, "plotting: no point to show"));
+    }
+    with_png(out, (1000, 700), |root| {
+        let (x_label, y_label) = labels;
+        let mut chart = ChartBuilder::on(root);
+        chart.margin(16).x_label_area_size(48).y_label_area_size(96);
+        let sci = |v: &Real| format!("{v:.1e}");
+        if log {
+            let mut c = chart
+                .build_cartesian_2d(
+                    ((x0 / 1.5)..(x1 * 1.5)).log_scale(),
+                    ((y0 / 1.5)..(y1 * 1.5)).log_scale(),
+                )
+                .map_err(|e| fail(&e))?;
+            c.configure_mesh()
+                .x_desc(x_label)
+                .y_desc(y_label)
+                .x_labels(6)
+                .y_labels(8)
+                .x_label_formatter(&sci)
+                .y_label_formatter(&sci)
+                .light_line_style(TRANSPARENT)
+                .label_style(("sans-serif", 16))
+                .draw()
+                .map_err(|e| fail(&e))?;
+            draw_curves(&mut c, &kept).map_err(|e| fail(&e))?;
+        } else {
+            let pad = |a: Real, b: Real| 0.05 * (b - a).max(1e-12);
+            let mut c = chart
+                .build_cartesian_2d(
+                    (x0 - pad(x0, x1))..(x1 + pad(x0, x1)),
+                    (y0 - pad(y0, y1))..(y1 + pad(y0, y1)),
+                )
+                .map_err(|e| fail(&e))?;
+            c.configure_mesh()
+                .x_desc(x_label)
+                .y_desc(y_label)
+                .x_labels(6)
+                .y_labels(8)
+                .x_label_formatter(&sci)
+                .y_label_formatter(&sci)
+                .light_line_style(TRANSPARENT)
+                .label_style(("sans-serif", 16))
+                .draw()
+                .map_err(|e| fail(&e))?;
+            draw_curves(&mut c, &kept).map_err(|e| fail(&e))?;
+        }
+        Ok(left_out)
+    })
+}
+
+/// The curves of [`study_figure`], a line and markers each, with the legend.
+fn draw_curves<'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+    curves: &[(String, Vec<(Real, Real)>)],
+) -> Result<(), String>
+where
+    X: Ranged<ValueType = Real>,
+    Y: Ranged<ValueType = Real>,
+{
+    for (k, (label, curve)) in curves.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        chart
+            .draw_series(LineSeries::new(
+                curve.iter().copied(),
+                color.stroke_width(2),
+            ))
+            .map_err(|e| e.to_string())?
+            .label(label.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(curve.iter().map(|&p| Circle::new(p, 5, color.filled())))
+            .map_err(|e| e.to_string())?;
+    }
+    legend(chart)
+}

@@ -3,7 +3,8 @@
 //! finish; shards joined by `--collect` give the unsharded rows; a bad key or value stops the
 //! study before any run; the Taylor–Green error of a study equals the grid tests' own and falls
 //! at second order; a run compared with itself as the reference has no error; a stress study
-//! finds where vorticity confinement blows the inviscid Taylor–Green vortex up.
+//! finds where vorticity confinement blows the inviscid Taylor–Green vortex up; a line profile
+//! is compared along its length.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -12,6 +13,7 @@ use eddy::bench::grid::TaylorGreen;
 
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/dam_break.toml");
 const TAYLOR_GREEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/taylor_green.toml");
+const CAVITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/lid_driven_cavity.toml");
 
 fn eddy(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_eddy"))
@@ -359,4 +361,56 @@ fn a_stress_study_reports_the_largest_stable_value() {
     );
     let report = crate::rows(&out.join("stability.csv"));
     assert_eq!(report[1], ["grid.vorticity_confinement", "0", "0.5"]);
+}
+
+/// The lid-driven cavity's centreline profile at 16^2 and 32^2 (after 1 s), against a 32^2
+/// reference run: the same grid reads no error along the profile, the coarser one does.
+#[test]
+fn a_line_profile_is_compared_along_its_length() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let reference = tmp.path().join("reference");
+    let at = |n: usize| {
+        [
+            format!("grid.resolution=[{n},{n},1]"),
+            format!("domain.max=[1.0,1.0,{:?}]", 1.0 / n as f64),
+        ]
+    };
+    let mut args: Vec<String> = ["run", CAVITY, "--set", "time.end=1", "--out"]
+        .map(String::from)
+        .to_vec();
+    args.push(reference.to_str().expect("utf-8").into());
+    for s in at(32) {
+        args.extend(["--set".into(), s]);
+    }
+    let o = eddy(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = tmp.path().join("study");
+    let [r16, d16] = at(16);
+    let [r32, d32] = at(32);
+    let resolution = format!("{},{}", r16, &r32["grid.resolution=".len()..]);
+    let depth = format!("{},{}", d16, &d32["domain.max=".len()..]);
+    let o = eddy(&[
+        "sweep",
+        CAVITY,
+        "--zip",
+        "--vary",
+        &resolution,
+        "--vary",
+        &depth,
+        "--set",
+        "time.end=1",
+        "--reference",
+        reference.to_str().expect("utf-8"),
+        "--compare",
+        "profile:u_vertical_centreline:u",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = numbers(
+        &rows(&out.join("sweep.csv")),
+        "error_u_vertical_centreline_u",
+    );
+    assert_eq!(err[1], 0.0, "{err:?}");
+    assert!(err[0] > 1e-3, "{err:?}");
 }

@@ -55,7 +55,9 @@ pub struct SweepArgs {
     /// (relative L2 norm over the reference's rows; see the README).
     #[arg(long, value_name = "RUN_DIR", requires = "compare")]
     pub reference: Option<PathBuf>,
-    /// A column compared with the reference run: metrics:NAME or probes:NAME (repeatable).
+    /// A column compared with the reference run: metrics:NAME or probes:NAME (against time),
+    /// or profile:PROBE:COLUMN (a line probe's profile_PROBE.csv at the end of the run, against
+    /// the distance s along it), repeatable.
     #[arg(long, value_name = "FILE:COLUMN", requires = "reference")]
     pub compare: Vec<String>,
     /// A table of published values (CSV with a `time` column) to compare --column with.
@@ -173,11 +175,15 @@ pub enum Analytic {
 enum Measure {
     /// The largest value of a metrics column the run computes itself.
     LargestMetric { column: &'static str },
-    /// A series of the run against the same series of a reference (time, value), from the
-    /// run's `file` (metrics or probes; None: whichever has the column).
+    /// A series of the run against the same series of a reference (time or s, value), from
+    /// the run's `file` (metrics, probes, profile_NAME; None: metrics or probes, whichever has
+    /// the column).
     Series {
-        file: Option<&'static str>,
+        file: Option<String>,
+        along: &'static str,
         column: String,
+        /// The sweep.csv column is error_<name>.
+        name: String,
         reference: Vec<(f64, f64)>,
     },
 }
@@ -186,7 +192,7 @@ impl Measure {
     fn name(&self) -> String {
         match self {
             Measure::LargestMetric { .. } => "error_taylor_green".into(),
-            Measure::Series { column, .. } => format!("error_{column}"),
+            Measure::Series { name, .. } => format!("error_{name}"),
         }
     }
 
@@ -194,21 +200,23 @@ impl Measure {
     fn error(&self, dir: &Path) -> Option<f64> {
         match self {
             Measure::LargestMetric { column } => {
-                let values = series(&dir.join("metrics.csv"), column)?;
+                let values = series(&dir.join("metrics.csv"), "time", column)?;
                 values.iter().map(|&(_, v)| v).reduce(f64::max)
             }
             Measure::Series {
                 file,
+                along,
                 column,
                 reference,
+                ..
             } => {
                 let files = match file {
-                    Some(f) => vec![*f],
+                    Some(f) => vec![f.as_str()],
                     None => vec!["metrics", "probes"],
                 };
                 let run = files
                     .iter()
-                    .find_map(|f| series(&dir.join(format!("{f}.csv")), column))?;
+                    .find_map(|f| series(&dir.join(format!("{f}.csv")), along, column))?;
                 relative_l2(&run, reference)
             }
         }
@@ -225,13 +233,24 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
     }
     if let Some(dir) = &args.reference {
         for c in &args.compare {
-            let (file, column) = match c.split_once(':') {
-                Some(("metrics", col)) => ("metrics", col),
-                Some(("probes", col)) => ("probes", col),
-                _ => bail!("--compare `{c}`: expected metrics:COLUMN or probes:COLUMN"),
+            let parts: Vec<&str> = c.split(':').collect();
+            let (file, along, column, name) = match parts[..] {
+                ["metrics", col] | ["probes", col] => {
+                    (parts[0].to_string(), "time", col, col.to_string())
+                }
+                ["profile", probe, col] => (
+                    format!("profile_{probe}"),
+                    "s",
+                    col,
+                    format!("{probe}_{col}"),
+                ),
+                _ => bail!(
+                    "--compare `{c}`: expected metrics:COLUMN, probes:COLUMN or \
+                     profile:PROBE:COLUMN"
+                ),
             };
             let path = dir.join(format!("{file}.csv"));
-            let reference = series(&path, column).with_context(|| {
+            let reference = series(&path, along, column).with_context(|| {
                 format!(
                     "--compare {c}: the reference {} has no such column",
                     path.display()
@@ -239,13 +258,15 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
             })?;
             out.push(Measure::Series {
                 file: Some(file),
+                along,
                 column: column.to_string(),
+                name,
                 reference,
             });
         }
     }
     if let (Some(path), Some(column)) = (&args.reference_csv, &args.column) {
-        let reference = series(path, column).with_context(|| {
+        let reference = series(path, "time", column).with_context(|| {
             format!(
                 "--reference-csv {}: no `time` and `{column}` columns",
                 path.display()
@@ -253,18 +274,21 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
         })?;
         out.push(Measure::Series {
             file: None,
+            along: "time",
             column: column.clone(),
+            name: column.clone(),
             reference,
         });
     }
     Ok(out)
 }
 
-/// (time, value) of `column` of a CSV with a `time` column; None when either is missing.
-fn series(path: &Path, column: &str) -> Option<Vec<(f64, f64)>> {
+/// (`along`, value) of `column` of a CSV with an `along` column (time, or s of a profile);
+/// None when either is missing.
+fn series(path: &Path, along: &str, column: &str) -> Option<Vec<(f64, f64)>> {
     let mut reader = csv::Reader::from_path(path).ok()?;
     let header = reader.headers().ok()?.clone();
-    let t = header.iter().position(|h| h == "time")?;
+    let t = header.iter().position(|h| h == along)?;
     let c = header.iter().position(|h| h == column)?;
     Some(
         reader
@@ -276,7 +300,8 @@ fn series(path: &Path, column: &str) -> Option<Vec<(f64, f64)>> {
 }
 
 /// sqrt(sum (a(t_k) - r_k)^2 / sum r_k^2) over the reference rows (t_k, r_k) inside the run's
-/// time span, with a(t) the run's series interpolated linearly; None when none overlap.
+/// span of t (time, or s along a profile), with a(t) the run's series interpolated linearly;
+/// None when none overlap.
 fn relative_l2(run: &[(f64, f64)], reference: &[(f64, f64)]) -> Option<f64> {
     let (first, last) = (run.first()?.0, run.last()?.0);
     let (mut num, mut den, mut n) = (0.0, 0.0, 0);
@@ -788,7 +813,8 @@ fn flag_energy_growth(row: &mut Row, dir: &Path, factor: f64) {
         return;
     }
     let path = dir.join("metrics.csv");
-    let Some(energy) = series(&path, "total_energy").or_else(|| series(&path, "kinetic_energy"))
+    let Some(energy) =
+        series(&path, "time", "total_energy").or_else(|| series(&path, "time", "kinetic_energy"))
     else {
         return;
     };

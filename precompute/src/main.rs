@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 #[cfg(feature = "mpi")]
 use eddy_precompute::precompute_with;
-use eddy_precompute::{bench, merge, precompute, run, ObstacleSpec, RunOptions, Summary};
+use eddy_precompute::{bench, merge, precompute, ObstacleSpec, RunOptions, Summary};
 
 #[derive(Parser)]
 #[command(
@@ -34,7 +34,7 @@ struct RunArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
     /// Compute every N-th direction starting at k, into a shard for `merge`.
-    #[arg(long, value_name = "k/N", value_parser = run::parse_shard)]
+    #[arg(long, value_name = "k/N", value_parser = eddy::io::parse_shard)]
     shard: Option<(usize, usize)>,
     /// Keep the directions already finished in the output (or by an interrupted run).
     #[arg(long)]

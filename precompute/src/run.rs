@@ -87,23 +87,6 @@ pub fn empty_database(spec: &ObstacleSpec, surface: &Surface) -> anyhow::Result<
     })
 }
 
-/// Parses `k/N`.
-pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let (k, n) = s.split_once('/').ok_or("expected k/N, e.g. 0/4")?;
-    let k: usize = k
-        .trim()
-        .parse()
-        .map_err(|e| format!("shard index `{k}`: {e}"))?;
-    let n: usize = n
-        .trim()
-        .parse()
-        .map_err(|e| format!("shard count `{n}`: {e}"))?;
-    if n == 0 || k >= n {
-        return Err(format!("shard {k}/{n}: need 0 <= k < N"));
-    }
-    Ok((k, n))
-}
-
 /// A finished direction as it reaches the run: its values (or why it failed) and its wall
 /// time on one thread, s.
 pub type Finished = (Job, anyhow::Result<Vec<Vec3>>, f64);

@@ -6,10 +6,12 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
 
 use eddy::abl::AblData;
-use eddy_precompute::{parts, precompute, ObstacleSpec, RunOptions};
+use eddy_precompute::{parts, precompute, ObstacleSpec};
+
+mod common;
+use common::{finished_parts, obstacle, options, serial, wait_for_parts};
 
 const OBSTACLE: &str = r#"
 name = "small sphere"
@@ -28,22 +30,9 @@ rotation = [4, 3]
 /// Translation 1 + 4 + 1, rotation 1 + 2 x 3 + 1 distinct directions.
 const DIRECTIONS: usize = 14;
 
-fn obstacle(dir: &Path) -> (ObstacleSpec, PathBuf) {
-    let path = dir.join("sphere.toml");
-    std::fs::write(&path, OBSTACLE).expect("writes the obstacle file");
-    (ObstacleSpec::load(&path, &[]).expect("valid"), path)
-}
-
 /// The single-process database, on one thread.
 fn single(spec: &ObstacleSpec, out: PathBuf) -> AblData {
-    let options = RunOptions {
-        out: out.clone(),
-        shard: None,
-        resume: false,
-        workers: 1,
-        progress: false,
-    };
-    precompute(spec, &options).expect("runs");
+    precompute(spec, &options(out.clone(), None, false, 1)).expect("runs");
     AblData::read(&out).expect("reads")
 }
 
@@ -62,18 +51,11 @@ fn mpirun(ranks: usize, file: &Path, out: &Path) -> Command {
     c
 }
 
-/// HDF5 opens files without close-on-exec: a child started while the other test has a file
-/// open inherits its descriptor and lock. The tests of this file therefore never overlap.
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
 #[test]
 fn two_ranks_write_the_single_process_database_bit_for_bit() {
     let _serial = serial();
     let tmp = tempfile::tempdir().expect("temp dir");
-    let (spec, file) = obstacle(tmp.path());
+    let (spec, file) = obstacle(tmp.path(), OBSTACLE);
     let out = tmp.path().join("mpi.h5");
     let status = mpirun(2, &file, &out).status().expect("starts mpirun");
     assert!(status.success(), "mpirun failed: {status}");
@@ -86,30 +68,14 @@ fn two_ranks_write_the_single_process_database_bit_for_bit() {
 fn a_killed_mpi_job_resumes_to_the_same_database() {
     let _serial = serial();
     let tmp = tempfile::tempdir().expect("temp dir");
-    let (spec, file) = obstacle(tmp.path());
+    let (spec, file) = obstacle(tmp.path(), OBSTACLE);
     let out = tmp.path().join("db.h5");
     let dir = parts::folder(&out);
     let mut job = mpirun(2, &file, &out)
         .stderr(Stdio::null())
         .spawn()
         .expect("starts mpirun");
-    let finished = |d: &Path| {
-        std::fs::read_dir(d).map_or(0, |r| {
-            r.filter(|e| {
-                e.as_ref()
-                    .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "bin"))
-            })
-            .count()
-        })
-    };
-    let started = Instant::now();
-    while finished(&dir) < 2 {
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "no direction finished"
-        );
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    wait_for_parts(&dir, 2);
     assert!(
         job.try_wait().expect("polls").is_none(),
         "killed before the end"
@@ -122,7 +88,7 @@ fn a_killed_mpi_job_resumes_to_the_same_database() {
     assert!(term.success());
     job.wait().expect("reaps mpirun");
     assert!(!out.exists(), "no database from a killed job");
-    let done = finished(&dir);
+    let done = finished_parts(&dir);
     assert!((2..DIRECTIONS).contains(&done), "{done} parts kept");
 
     let resumed = mpirun(2, &file, &out)

@@ -2,12 +2,14 @@
 //! equal the unsharded database bit for bit,
 //! overlaps and gaps are refused, and a killed run resumed completes the same database.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
-use std::time::{Duration, Instant};
 
 use eddy::abl::{AblData, AblDatabase};
-use eddy_precompute::{merge, parts, precompute, ObstacleSpec, RunOptions};
+use eddy_precompute::{merge, parts, precompute};
+
+mod common;
+use common::{finished_parts, obstacle, options, serial, wait_for_parts};
 
 const OBSTACLE: &str = r#"
 name = "small sphere"
@@ -22,37 +24,13 @@ translation = [3, 4]
 rotation = [4, 3]
 "#;
 
-fn spec(dir: &Path) -> (ObstacleSpec, PathBuf) {
-    let path = dir.join("sphere.toml");
-    std::fs::write(&path, OBSTACLE).expect("writes the obstacle file");
-    (ObstacleSpec::load(&path, &[]).expect("valid"), path)
-}
-
-fn options(out: PathBuf, shard: Option<(usize, usize)>, resume: bool) -> RunOptions {
-    RunOptions {
-        out,
-        shard,
-        resume,
-        workers: 2,
-        progress: false,
-    }
-}
-
-/// HDF5 opens files without close-on-exec: a child spawned while the other test has a database
-/// open inherits the descriptor and its lock, and the next open fails. The two tests of this
-/// file therefore never overlap.
-fn hdf5_or_child() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
 #[test]
 fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
-    let _serial = hdf5_or_child();
+    let _serial = serial();
     let tmp = tempfile::tempdir().expect("temp dir");
-    let (spec, _) = spec(tmp.path());
+    let (spec, _) = obstacle(tmp.path(), OBSTACLE);
     let full = tmp.path().join("full.h5");
-    let s = precompute(&spec, &options(full.clone(), None, false)).expect("runs");
+    let s = precompute(&spec, &options(full.clone(), None, false, 2)).expect("runs");
     // Translation 1 + 4 + 1, rotation 1 + 2 * 3 + 1 distinct directions.
     assert_eq!((s.computed, s.reused), (14, 0));
     assert!(
@@ -114,9 +92,9 @@ fn shards_merge_to_the_unsharded_database_and_refuse_overlaps_and_gaps() {
 
 #[test]
 fn a_killed_run_resumes_to_the_same_database() {
-    let _serial = hdf5_or_child();
+    let _serial = serial();
     let tmp = tempfile::tempdir().expect("temp dir");
-    let (spec, file) = spec(tmp.path());
+    let (spec, file) = obstacle(tmp.path(), OBSTACLE);
     let out = tmp.path().join("db.h5");
     let dir = parts::folder(&out);
     let mut child = Command::new(env!("CARGO_BIN_EXE_eddy-precompute"))
@@ -126,23 +104,7 @@ fn a_killed_run_resumes_to_the_same_database() {
         .args(["--jobs", "1"])
         .spawn()
         .expect("starts eddy-precompute");
-    let started = Instant::now();
-    let finished = |d: &Path| {
-        std::fs::read_dir(d).map_or(0, |r| {
-            r.filter(|e| {
-                e.as_ref()
-                    .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "bin"))
-            })
-            .count()
-        })
-    };
-    while finished(&dir) < 2 {
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "no direction finished"
-        );
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    wait_for_parts(&dir, 2);
     assert!(
         child.try_wait().expect("polls").is_none(),
         "killed before the end"
@@ -150,21 +112,21 @@ fn a_killed_run_resumes_to_the_same_database() {
     child.kill().expect("kills");
     child.wait().expect("reaps");
     assert!(!out.exists(), "no database from a killed run");
-    let done = finished(&dir);
+    let done = finished_parts(&dir);
 
-    let e = precompute(&spec, &options(out.clone(), None, false)).expect_err("parts present");
+    let e = precompute(&spec, &options(out.clone(), None, false, 2)).expect_err("parts present");
     assert!(e.to_string().contains("--resume"), "{e}");
-    let s = precompute(&spec, &options(out.clone(), None, true)).expect("resumes");
+    let s = precompute(&spec, &options(out.clone(), None, true, 2)).expect("resumes");
     assert_eq!(s.reused, done);
     assert_eq!(s.computed + s.reused, 14);
 
     let fresh = tmp.path().join("fresh.h5");
-    precompute(&spec, &options(fresh.clone(), None, false)).expect("runs");
+    precompute(&spec, &options(fresh.clone(), None, false, 2)).expect("runs");
     assert_eq!(
         AblData::read(&out).expect("reads"),
         AblData::read(&fresh).expect("reads")
     );
     // Resuming a finished database computes nothing.
-    let again = precompute(&spec, &options(out.clone(), None, true)).expect("resumes");
+    let again = precompute(&spec, &options(out.clone(), None, true, 2)).expect("resumes");
     assert_eq!((again.computed, again.reused), (0, 14));
 }

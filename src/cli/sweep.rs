@@ -37,7 +37,7 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub jobs: u64,
     /// Run every N-th point starting at k, into sweep-k-of-N.csv (join with --collect).
-    #[arg(long, value_name = "k/N", value_parser = parse_shard)]
+    #[arg(long, value_name = "k/N", value_parser = eddy::io::parse_shard)]
     pub shard: Option<(usize, usize)>,
     /// Stop a run after this many wall-clock seconds and record it as timed out.
     #[arg(long)]
@@ -324,20 +324,6 @@ fn relative_l2(run: &[(f64, f64)], reference: &[(f64, f64)]) -> Option<f64> {
             num.sqrt()
         }
     })
-}
-
-/// Parses `k/N`.
-fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let (k, n) = s.split_once('/').ok_or("expected k/N, e.g. 0/4")?;
-    let k: usize = k.trim().parse().map_err(|e| format!("shard `{k}`: {e}"))?;
-    let n: usize = n
-        .trim()
-        .parse()
-        .map_err(|e| format!("shard count `{n}`: {e}"))?;
-    if n == 0 || k >= n {
-        return Err(format!("shard {k}/{n}: need 0 <= k < N"));
-    }
-    Ok((k, n))
 }
 
 /// One varied key and its values, as given.

@@ -15,6 +15,7 @@ mod hdf5_frames;
 mod hdf5_grid;
 pub mod plot;
 mod pvd;
+mod shard;
 mod vti;
 mod vtk;
 
@@ -28,5 +29,6 @@ pub use hdf5_grid::{
     read_velocity, Hdf5GridFrames, StoredVelocity, GRID_FORMAT, GRID_FORMAT_VERSION,
 };
 pub use pvd::PvdSeries;
+pub use shard::parse_shard;
 pub use vti::write_grid_vtk;
 pub use vtk::write_particles_vtk;

@@ -384,10 +384,8 @@ pub fn study_figure(
         return Err(IoError::invalid(out, "plotting: no point to show"));
     }
     with_png(out, (1000, 700), |root| {
-        let (x_label, y_label) = labels;
         let mut chart = ChartBuilder::on(root);
         chart.margin(16).x_label_area_size(48).y_label_area_size(96);
-        let sci = |v: &Real| format!("{v:.1e}");
         if log {
             let mut c = chart
                 .build_cartesian_2d(
@@ -395,18 +393,7 @@ pub fn study_figure(
                     ((y0 / 1.5)..(y1 * 1.5)).log_scale(),
                 )
                 .map_err(|e| fail(&e))?;
-            c.configure_mesh()
-                .x_desc(x_label)
-                .y_desc(y_label)
-                .x_labels(6)
-                .y_labels(8)
-                .x_label_formatter(&sci)
-                .y_label_formatter(&sci)
-                .light_line_style(TRANSPARENT)
-                .label_style(("sans-serif", 16))
-                .draw()
-                .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, &kept).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, &kept).map_err(|e| fail(&e))?;
         } else {
             let pad = |a: Real, b: Real| 0.05 * (b - a).max(1e-12);
             let mut c = chart
@@ -415,32 +402,36 @@ pub fn study_figure(
                     (y0 - pad(y0, y1))..(y1 + pad(y0, y1)),
                 )
                 .map_err(|e| fail(&e))?;
-            c.configure_mesh()
-                .x_desc(x_label)
-                .y_desc(y_label)
-                .x_labels(6)
-                .y_labels(8)
-                .x_label_formatter(&sci)
-                .y_label_formatter(&sci)
-                .light_line_style(TRANSPARENT)
-                .label_style(("sans-serif", 16))
-                .draw()
-                .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, &kept).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, &kept).map_err(|e| fail(&e))?;
         }
         Ok(left_out)
     })
 }
 
-/// The curves of [`study_figure`], a line and markers each, with the legend.
+/// The axes (labelled `labels`, ticks in scientific notation) and curves of
+/// [`study_figure`], a line and markers each, with the legend.
 fn draw_curves<'a, X, Y>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+    labels: (&str, &str),
     curves: &[(String, Vec<(Real, Real)>)],
 ) -> Result<(), String>
 where
-    X: Ranged<ValueType = Real>,
-    Y: Ranged<ValueType = Real>,
+    X: Ranged<ValueType = Real> + plotters::coord::ranged1d::ValueFormatter<Real>,
+    Y: Ranged<ValueType = Real> + plotters::coord::ranged1d::ValueFormatter<Real>,
 {
+    let sci = |v: &Real| format!("{v:.1e}");
+    chart
+        .configure_mesh()
+        .x_desc(labels.0)
+        .y_desc(labels.1)
+        .x_labels(6)
+        .y_labels(8)
+        .x_label_formatter(&sci)
+        .y_label_formatter(&sci)
+        .light_line_style(TRANSPARENT)
+        .label_style(("sans-serif", 16))
+        .draw()
+        .map_err(|e| e.to_string())?;
     for (k, (label, curve)) in curves.iter().enumerate() {
         let color = Palette99::pick(k).to_rgba();
         chart

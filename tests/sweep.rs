@@ -361,6 +361,26 @@ fn a_stress_study_reports_the_largest_stable_value() {
     );
     let report = crate::rows(&out.join("stability.csv"));
     assert_eq!(report[1], ["grid.vorticity_confinement", "0", "0.5"]);
+    // The stability map: status over the varied key and the steps taken.
+    let map = out.join("map.png");
+    let o = eddy(&[
+        "plot-sweep",
+        out.join("sweep.csv").to_str().expect("utf-8"),
+        "--x",
+        "grid.vorticity_confinement",
+        "--y",
+        "steps",
+        "--by",
+        "status",
+        "--points",
+        "--linear",
+        "--out",
+        map.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&map)
+        .expect("the map")
+        .starts_with(b"\x89PNG"));
 }
 
 /// The lid-driven cavity's centreline profile at 16^2 and 32^2 (after 1 s), against a 32^2

@@ -104,6 +104,10 @@ pub struct PlotArgs {
     /// Linear axes instead of log-log.
     #[arg(long)]
     pub linear: bool,
+    /// Markers only, no lines: with two varied keys as --x and --y and --by status, a
+    /// stability map.
+    #[arg(long)]
+    pub points: bool,
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
@@ -155,8 +159,21 @@ pub fn plot(args: &PlotArgs) -> anyhow::Result<()> {
     for (_, c) in &mut curves {
         c.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
-    let left_out =
-        eddy::io::plot::study_figure(&args.out, (&args.x, &args.y), &curves, !args.linear)?;
+    // A map by status reads red for unstable (the palette's first colour), green for finished
+    // (its second).
+    let rank = |label: &str| {
+        ["unstable", "finished", "failed", "timed out"]
+            .iter()
+            .position(|s| label.contains(&format!("status = {s}")))
+    };
+    curves.sort_by_key(|(label, _)| rank(label));
+    let left_out = eddy::io::plot::study_figure(
+        &args.out,
+        (&args.x, &args.y),
+        &curves,
+        !args.linear,
+        !args.points,
+    )?;
     if left_out > 0 {
         eprintln!("eddy: left out {left_out} points a log axis cannot show (use --linear)");
     }

@@ -359,14 +359,16 @@ pub fn error_figure(
 }
 
 /// Curves of a parameter study, `y` against `x` (log-log, or linear axes with `log = false`),
-/// one per group with a marker at each run, into the PNG `out` (written under a temporary name
-/// and renamed). Points that a log axis cannot show (zero, negative, not finite) are left out
-/// and counted in the result.
+/// one per group with a marker at each run (markers alone with `lines = false`: a stability
+/// map of two varied keys, grouped by status), into the PNG `out` (written under a temporary
+/// name and renamed). Points that a log axis cannot show (zero, negative, not finite) are left
+/// out and counted in the result.
 pub fn study_figure(
     out: &Path,
     labels: (&str, &str),
     curves: &[(String, Vec<(Real, Real)>)],
     log: bool,
+    lines: bool,
 ) -> Result<usize, IoError> {
     let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
     let shown =
@@ -393,7 +395,7 @@ pub fn study_figure(
                     ((y0 / 1.5)..(y1 * 1.5)).log_scale(),
                 )
                 .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, labels, &kept).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, &kept, lines).map_err(|e| fail(&e))?;
         } else {
             let pad = |a: Real, b: Real| 0.05 * (b - a).max(1e-12);
             let mut c = chart
@@ -402,7 +404,7 @@ pub fn study_figure(
                     (y0 - pad(y0, y1))..(y1 + pad(y0, y1)),
                 )
                 .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, labels, &kept).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, &kept, lines).map_err(|e| fail(&e))?;
         }
         Ok(left_out)
     })
@@ -414,6 +416,7 @@ fn draw_curves<'a, X, Y>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
     labels: (&str, &str),
     curves: &[(String, Vec<(Real, Real)>)],
+    lines: bool,
 ) -> Result<(), String>
 where
     X: Ranged<ValueType = Real> + plotters::coord::ranged1d::ValueFormatter<Real>,
@@ -434,6 +437,15 @@ where
         .map_err(|e| e.to_string())?;
     for (k, (label, curve)) in curves.iter().enumerate() {
         let color = Palette99::pick(k).to_rgba();
+        let markers = chart
+            .draw_series(curve.iter().map(|&p| Circle::new(p, 6, color.filled())))
+            .map_err(|e| e.to_string())?;
+        if !lines {
+            markers
+                .label(label.clone())
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+            continue;
+        }
         chart
             .draw_series(LineSeries::new(
                 curve.iter().copied(),
@@ -444,9 +456,6 @@ where
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
             });
-        chart
-            .draw_series(curve.iter().map(|&p| Circle::new(p, 5, color.filled())))
-            .map_err(|e| e.to_string())?;
     }
     legend(chart)
 }

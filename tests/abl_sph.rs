@@ -92,7 +92,7 @@ fn carried<'a>(sph: &'a SphSolver, name: &str) -> &'a [Vec3] {
 /// Tags every fluid particle with its index as a carried field, so it can be followed through
 /// the solver's reordering.
 fn tag(p: &mut Pipeline) {
-    let fluid = &mut p.sim.sph.as_mut().unwrap().fluid;
+    let fluid = &mut p.sim.sph.as_mut().expect("the test scene has it").fluid;
     let i = fluid.carry("test_id");
     let ids = &mut fluid.carried[i].1;
     for (k, id) in ids.iter_mut().enumerate() {
@@ -129,7 +129,13 @@ fn without_seeding_the_run_is_the_plain_sph_bit_for_bit() {
         abl.iter().any(|w| *w != Vec3::zeros()),
         "the layer was attached"
     );
-    assert!(quiet.sim.turbulence.as_ref().unwrap().vortices.is_empty());
+    assert!(quiet
+        .sim
+        .turbulence
+        .as_ref()
+        .expect("the test scene has it")
+        .vortices
+        .is_empty());
 }
 
 /// At the first step every particle within the layer (two spacings) of the ball takes the
@@ -256,7 +262,7 @@ steps = 1
 resolution = [20, 20, 20]
 "#;
     let g = built(grid_text);
-    let grid = g.sim.grid.as_ref().unwrap();
+    let grid = g.sim.grid.as_ref().expect("the test scene has it");
     let distance = eddy::grid::walls::wall_distance(grid);
     let mut cells = SeedSamples::default();
     let dx = grid.mac.dx;
@@ -284,12 +290,14 @@ fn vortex_kernels_stay_inside_the_liquid() {
     let omega = Vec3::new(0.0, 0.0, 3.0);
     let sigma = kernel::sigma_for_radius(5.0 * H);
     v.push(Vec3::new(0.6, top + 3.0 * H, 0.2), omega, sigma)
-        .unwrap(); // above the water
-    v.push(Vec3::new(0.25, 0.15, 0.2), omega, sigma).unwrap(); // inside the ball
+        .expect("a valid vortex"); // above the water
+    v.push(Vec3::new(0.25, 0.15, 0.2), omega, sigma)
+        .expect("a valid vortex"); // inside the ball
     v.push(Vec3::new(0.6, top - 1.5 * H, 0.2), omega, sigma)
-        .unwrap(); // under the surface
+        .expect("a valid vortex"); // under the surface
     let deep = kernel::sigma_for_radius(2.5 * H);
-    v.push(Vec3::new(0.6, 0.15, 0.2), omega, deep).unwrap(); // deep, small
+    v.push(Vec3::new(0.6, 0.15, 0.2), omega, deep)
+        .expect("a valid vortex"); // deep, small
     let surface = Surface::of(s, reach);
     let removed = fit_to_liquid(&mut v, s, &surface);
     assert_eq!(removed, 2);
@@ -324,7 +332,12 @@ fn vortex_kernels_stay_inside_the_liquid() {
         };
         p.step(None, None).expect("steps");
         let s = sph(&p);
-        let v = &p.sim.turbulence.as_ref().unwrap().vortices;
+        let v = &p
+            .sim
+            .turbulence
+            .as_ref()
+            .expect("the test scene has it")
+            .vortices;
         seen = seen.max(v.len());
         let nearest = |points: &[Vec3], x: &Vec3| {
             points
@@ -373,7 +386,13 @@ fn it_composes_with_a_refinement() {
     let parts = |prefix: &str| trace.iter().filter(|t| t.starts_with(prefix)).count();
     assert_eq!(parts("turbulence/"), 3 * 5, "{trace:?}");
     assert!(trace.iter().any(|t| t == "sph/refine"), "{trace:?}");
-    assert!(!p.sim.turbulence.as_ref().unwrap().vortices.is_empty());
+    assert!(!p
+        .sim
+        .turbulence
+        .as_ref()
+        .expect("the test scene has it")
+        .vortices
+        .is_empty());
 }
 
 /// A database for another ball is refused with both fingerprints named.
@@ -385,7 +404,10 @@ fn a_database_for_another_obstacle_is_refused() {
         text(&common::abl_line(&db), "").replace(&format!("radius = {RADIUS}"), "radius = 0.1");
     let scene = scene(&other).expect("loads");
     let e = Pipeline::build(&scene).err().expect("refused").to_string();
-    let fp = |r: Real| eddy::abl::geometry_fingerprint(&Shape::Sphere { radius: r }).unwrap();
+    let fp = |r: Real| {
+        eddy::abl::geometry_fingerprint(&Shape::Sphere { radius: r })
+            .expect("a sphere has a fingerprint")
+    };
     for needle in [fp(RADIUS), fp(0.1)] {
         assert!(e.contains(&needle), "{e} does not name {needle}");
     }

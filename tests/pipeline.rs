@@ -105,7 +105,10 @@ fn grid_and_fluid_share_one_clock() {
         assert_eq!(rec.dt, sph_dt.min(grid_dt));
         assert_eq!(rec.sph.expect("sph stepped").dt, rec.dt);
         assert_eq!(rec.grid.expect("grid stepped").dt, rec.dt);
-        let (sph, grid) = (p.sim.sph.as_ref().unwrap(), p.sim.grid.as_ref().unwrap());
+        let (sph, grid) = (
+            p.sim.sph.as_ref().expect("the test scene has it"),
+            p.sim.grid.as_ref().expect("the test scene has it"),
+        );
         assert_eq!(sph.time(), p.sim.time());
         assert_eq!(grid.time(), p.sim.time());
     }
@@ -166,7 +169,13 @@ fn frames_land_on_the_output_interval() {
     let times: Vec<f64> = pvd
         .split("timestep=\"")
         .skip(1)
-        .map(|s| s.split('"').next().unwrap().parse().expect("a time"))
+        .map(|s| {
+            s.split('"')
+                .next()
+                .expect("a quoted time")
+                .parse()
+                .expect("a time")
+        })
         .collect();
     assert_eq!(times.len(), 6, "{times:?}");
     for (k, t) in times.iter().enumerate() {
@@ -176,7 +185,13 @@ fn frames_land_on_the_output_interval() {
     let dts: Vec<f64> = metrics
         .lines()
         .skip(1)
-        .map(|l| l.split(',').nth(2).unwrap().parse().expect("dt"))
+        .map(|l| {
+            l.split(',')
+                .nth(2)
+                .expect("a dt column")
+                .parse()
+                .expect("dt")
+        })
         .collect();
     assert!(dts.iter().all(|&dt| dt >= 0.0015 - 1e-15), "{dts:?}");
 }

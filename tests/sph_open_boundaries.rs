@@ -138,7 +138,10 @@ fn a_channel_carries_the_inflow_rate_and_stops_growing() {
         .filter(|(t, _)| *t > 1.1)
         .map(|c| c.1)
         .collect();
-    let (lo, hi) = (late.iter().min().unwrap(), late.iter().max().unwrap());
+    let (lo, hi) = (
+        late.iter().min().expect("late samples"),
+        late.iter().max().expect("late samples"),
+    );
     eprintln!("count late in the run: {lo}..{hi}, {sites} sites a layer");
     assert!(
         hi - lo <= 2 * sites,
@@ -164,7 +167,7 @@ fn refinements_and_carried_fields_follow_the_count() {
         );
         let mut p = built(&channel(l, hh, w, h, u, &extra));
         let tagged = {
-            let fluid = &mut p.sim.sph.as_mut().unwrap().fluid;
+            let fluid = &mut p.sim.sph.as_mut().expect("the test scene has it").fluid;
             let i = fluid.carry("tag");
             fluid.carried[i]
                 .1

@@ -28,8 +28,8 @@ fn block(container: bool, refinement: &str) -> Scene {
     );
     if container {
         text.push_str(
-            "[container]\nshape = { type = \"box\", half_extents = [0.2, 0.2, 0.2] }\n\
-             position = [0.16, 0.18, 0.16]\n",
+            "[container]\nshape = { type = \"box\", half_extents = [0.16, 0.2, 0.16] }\n\
+             position = [0.16, 0.2, 0.16]\n",
         );
     }
     scene::parse_str(&text, Path::new("ops.toml"), &[]).expect("test scene is valid")

@@ -267,43 +267,41 @@ impl RigidBody {
     /// # Panics
     /// If `spacing` is not positive and finite (the scene validates the fluid spacing).
     pub fn sample_surface(&self, spacing: Real) -> Vec<Point3> {
-        assert!(
-            spacing > 0.0 && spacing.is_finite(),
-            "sample spacing must be positive and finite, got {spacing}"
-        );
-        use sampling::Piece;
-        use std::f64::consts::{FRAC_PI_2, PI};
-        match &self.geometry {
-            Geometry::Box(c) => {
+        sample_geometry(&self.geometry, spacing)
+    }
+
+    /// Body-local points about `spacing` apart on the surface moved `offset` along its outward
+    /// normal (negative: into the solid), as [`Self::sample_surface`] samples it. Boxes,
+    /// spheres, cylinders and capsules are grown or shrunk exactly (a dimension stops at zero,
+    /// so a plate thinner than the offset is sampled on its mid-plane); mesh samples move along
+    /// the normal of their nearest surface point.
+    ///
+    /// # Panics
+    /// As [`Self::sample_surface`].
+    pub fn sample_offset_surface(&self, spacing: Real, offset: Real) -> Vec<Point3> {
+        let grow = |x: Real| (x + offset).max(0.0);
+        let offset_geometry = match &self.geometry {
+            Geometry::Box(c) if offset > 0.0 => {
                 let h = c.half_extents;
-                sampling::sample_box(&Vec3::new(h.x, h.y, h.z), spacing)
+                return sampling::sample_box_shell(&Vec3::new(h.x, h.y, h.z), offset, spacing);
             }
-            Geometry::Sphere(b) => sampling::fibonacci_sphere(b.radius, spacing),
-            // Profiles from the bottom pole to the top pole, revolved about y.
+            Geometry::Box(c) => Geometry::Box(Cuboid::new(c.half_extents.map(grow))),
+            Geometry::Sphere(b) => Geometry::Sphere(Ball::new(grow(b.radius))),
             Geometry::Cylinder(c) => {
-                let (r, hh) = (c.radius, c.half_height);
-                sampling::revolve(
-                    &[
-                        Piece::line((0.0, -hh), (r, -hh)),
-                        Piece::line((r, -hh), (r, hh)),
-                        Piece::line((r, hh), (0.0, hh)),
-                    ],
-                    spacing,
-                )
+                Geometry::Cylinder(Cylinder::new(grow(c.half_height), grow(c.radius)))
             }
             Geometry::Capsule(c) => {
-                let (r, hh) = (c.radius, c.half_height());
-                sampling::revolve(
-                    &[
-                        Piece::arc(r, -hh, PI, FRAC_PI_2),
-                        Piece::line((r, -hh), (r, hh)),
-                        Piece::arc(r, hh, FRAC_PI_2, 0.0),
-                    ],
-                    spacing,
-                )
+                Geometry::Capsule(Capsule::new_y(c.half_height(), grow(c.radius)))
             }
-            Geometry::Mesh(m) => mesh::sample_mesh(m, spacing),
-        }
+            Geometry::Mesh(_) => {
+                return self
+                    .sample_surface(spacing)
+                    .into_iter()
+                    .map(|p| p + offset * self.normal_local(&p))
+                    .collect()
+            }
+        };
+        sample_geometry(&offset_geometry, spacing)
     }
 
     /// The world-space bounding box of the body at time `t`.
@@ -329,5 +327,46 @@ impl RigidBody {
     pub fn local_aabb(&self) -> (Point3, Point3) {
         let aabb = self.geometry.parry().compute_local_aabb();
         (to_point(aabb.mins), to_point(aabb.maxs))
+    }
+}
+
+/// Surface samples of `geometry` (see [`RigidBody::sample_surface`]).
+fn sample_geometry(geometry: &Geometry, spacing: Real) -> Vec<Point3> {
+    assert!(
+        spacing > 0.0 && spacing.is_finite(),
+        "sample spacing must be positive and finite, got {spacing}"
+    );
+    use sampling::Piece;
+    use std::f64::consts::{FRAC_PI_2, PI};
+    match geometry {
+        Geometry::Box(c) => {
+            let h = c.half_extents;
+            sampling::sample_box(&Vec3::new(h.x, h.y, h.z), spacing)
+        }
+        Geometry::Sphere(b) => sampling::fibonacci_sphere(b.radius, spacing),
+        // Profiles from the bottom pole to the top pole, revolved about y.
+        Geometry::Cylinder(c) => {
+            let (r, hh) = (c.radius, c.half_height);
+            sampling::revolve(
+                &[
+                    Piece::line((0.0, -hh), (r, -hh)),
+                    Piece::line((r, -hh), (r, hh)),
+                    Piece::line((r, hh), (0.0, hh)),
+                ],
+                spacing,
+            )
+        }
+        Geometry::Capsule(c) => {
+            let (r, hh) = (c.radius, c.half_height());
+            sampling::revolve(
+                &[
+                    Piece::arc(r, -hh, PI, FRAC_PI_2),
+                    Piece::line((r, -hh), (r, hh)),
+                    Piece::arc(r, hh, FRAC_PI_2, 0.0),
+                ],
+                spacing,
+            )
+        }
+        Geometry::Mesh(m) => mesh::sample_mesh(m, spacing),
     }
 }

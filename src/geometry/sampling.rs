@@ -47,6 +47,39 @@ pub(crate) fn sample_box(h: &Vec3, spacing: Real) -> Vec<Point3> {
     out
 }
 
+/// Points on the faces of the box `[-h, h]` grown by `offset` > 0, each face a grid whose
+/// columns continue those of a lattice filling the box from half a step inside its faces (the
+/// steps as [`sample_box`] divides the edges), with the columns that still fall on the grown
+/// face added around it. A fluid lattice inside the box thus sees its mirror image on every
+/// face (the boundary's mirror layer) with no misalignment.
+pub(crate) fn sample_box_shell(h: &Vec3, offset: Real, spacing: Real) -> Vec<Point3> {
+    let columns = |axis: usize| -> Vec<Real> {
+        let n = parts(2.0 * h[axis], spacing);
+        let step = 2.0 * h[axis] / n as Real;
+        let extra = ((offset / step) + 0.5 + 1e-9).floor() as i64;
+        (-extra..n as i64 + extra)
+            .map(|k| -h[axis] + (k as Real + 0.5) * step)
+            .collect()
+    };
+    let cols: Vec<Vec<Real>> = (0..3).map(columns).collect();
+    let mut out = Vec::new();
+    for a in 0..3 {
+        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+        for side in [-1.0, 1.0] {
+            for &u in &cols[b] {
+                for &w in &cols[c] {
+                    let mut p = Point3::origin();
+                    p[a] = side * (h[a] + offset);
+                    p[b] = u;
+                    p[c] = w;
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Appends a circle of radius `radius` about the y axis at height `y`, with steps of at most
 /// `spacing`, turned by `phase` steps (0.5 staggers it against its neighbour rings). A circle of
 /// radius 0 (up to rounding, as at the pole of an arc) is its centre.

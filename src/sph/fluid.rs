@@ -30,8 +30,8 @@ pub struct FluidParticles {
 
 impl FluidParticles {
     /// Fills the blocks on a cubic lattice of the given spacing (particle centres half a spacing
-    /// inside each face), keeping the sites for which `keep` holds (the solver drops those within
-    /// the Akinci wall stand-off and inside obstacles). The mass makes the lattice density
+    /// inside each face), keeping the sites for which `keep` holds (the solver drops those closer
+    /// than half a spacing to a wall and inside obstacles). The mass makes the lattice density
     /// exactly `rest_density`, so a fluid at rest starts with no density error.
     pub fn from_blocks(
         blocks: &[FluidBlock],
@@ -148,13 +148,20 @@ impl FluidParticles {
 /// Sum of W over an infinite cubic lattice of the given spacing, self included.
 pub fn lattice_kernel_sum(kernel: &CubicSpline, spacing: Real) -> Real {
     let reach = (kernel.support() / spacing).ceil() as i64;
+    (-reach..=reach)
+        .map(|k| plane_kernel_sum_at(kernel, spacing, k as Real * spacing))
+        .sum()
+}
+
+/// Sum of W from a point over an infinite square lattice of the given spacing in a plane at
+/// `distance` from it, the point above a lattice site (self included at distance zero).
+pub fn plane_kernel_sum_at(kernel: &CubicSpline, spacing: Real, distance: Real) -> Real {
+    let reach = (kernel.support() / spacing).ceil() as i64;
     let mut sum = 0.0;
     for i in -reach..=reach {
         for j in -reach..=reach {
-            for k in -reach..=reach {
-                let r = spacing * ((i * i + j * j + k * k) as Real).sqrt();
-                sum += kernel.w(r);
-            }
+            let r2 = spacing * spacing * (i * i + j * j) as Real + distance * distance;
+            sum += kernel.w(r2.sqrt());
         }
     }
     sum

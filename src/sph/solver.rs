@@ -131,11 +131,11 @@ impl SphSolver {
     ) -> Self {
         let spacing = params.spacing;
         let kernel = CubicSpline::new(2.0 * spacing);
-        // Akinci walls hold fluid about 1.5 spacings off (see `boundary`): lattice sites closer
-        // than one spacing to a surface, or inside an obstacle, stay empty.
+        // The walls' mirror layer (see `boundary`) completes the lattice from half a spacing
+        // off a surface: sites closer than that, or inside an obstacle, stay empty.
         let keep = |x: &Vec3| {
             super::walls::wall_distance(&bodies, params.container, 0.0, &crate::Point3::from(*x))
-                >= spacing
+                >= (0.5 - 1e-6) * spacing
         };
         let mut fluid = FluidParticles::from_blocks(
             &params.blocks,
@@ -152,7 +152,7 @@ impl SphSolver {
             keep,
         );
         open.prime(&mut fluid);
-        let boundary = BoundaryParticles::sample(&bodies, spacing, &kernel, 0.0);
+        let boundary = BoundaryParticles::sample(&bodies, params.container, spacing, &kernel, 0.0);
         let n = fluid.len();
         let mut me = Self {
             kernel,

@@ -1,0 +1,98 @@
+//! SPH fidelity: the fluid a scene asks for. Every fluid block of every shipped scene holds
+//! the mass its density and volume give, with the walls' mirror layer completing the lattice
+//! from half a spacing off every surface (containers and obstacles, moving ones included).
+
+use eddy::pipeline::sph_solver;
+use eddy::sph::walls::wall_distance;
+use eddy::sph::SphSolver;
+use eddy::{Point3, Real, Vec3};
+use rayon::prelude::*;
+use std::path::Path;
+
+/// Volume of the fluid region inside the blocks of `s` (inside the container, outside the
+/// obstacles at t = 0), measured by the points of a lattice `refine` times finer than the
+/// particles' that lie there; blocks count separately, as they are filled separately.
+fn fluid_volume(s: &SphSolver, blocks: &[eddy::sph::FluidBlock], refine: usize) -> Real {
+    let d = s.spacing / refine as Real;
+    let (bodies, container) = (&s.bodies, s.has_container());
+    blocks
+        .iter()
+        .map(|b| {
+            let n: Vec<usize> = (0..3)
+                .map(|a| ((b.max[a] - b.min[a]) / d).round() as usize)
+                .collect();
+            let inside = (0..n[0] * n[1] * n[2])
+                .into_par_iter()
+                .filter(|&c| {
+                    let idx = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+                    let x =
+                        Point3::from(Vec3::from_fn(|a, _| b.min[a] + (idx[a] as Real + 0.5) * d));
+                    wall_distance(bodies, container, 0.0, &x) > 0.0
+                })
+                .count();
+            inside as Real * d.powi(3)
+        })
+        .sum()
+}
+
+/// Mass of the particles inside the blocks (an inflow's buffer particles are the emitter's).
+fn block_mass(s: &SphSolver, blocks: &[eddy::sph::FluidBlock]) -> Real {
+    let within =
+        |x: &Vec3, b: &eddy::sph::FluidBlock| (0..3).all(|a| x[a] >= b.min[a] && x[a] <= b.max[a]);
+    let n = s
+        .fluid
+        .x
+        .iter()
+        .filter(|x| blocks.iter().any(|b| within(x, b)))
+        .count();
+    n as Real * s.fluid.mass
+}
+
+fn relative_mass_error(path: &Path, overrides: &[String]) -> Real {
+    let scene = eddy::scene::load(path, overrides).expect("shipped scene loads");
+    let fluid = scene.fluid.clone().expect("an SPH scene");
+    let s = sph_solver(&scene).expect("the solver builds");
+    let expected = fluid.density * fluid_volume(&s, &fluid.blocks, 3);
+    block_mass(&s, &fluid.blocks) / expected - 1.0
+}
+
+/// Every shipped scene with fluid blocks: mass within 1 % of density x volume at its spacing.
+#[test]
+fn every_shipped_fluid_block_holds_its_mass() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut checked = 0;
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)
+        .expect("scenes folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.sort();
+    for path in paths {
+        let scene = eddy::scene::load(&path, &[]).expect("shipped scene loads");
+        if scene.fluid.as_ref().is_none_or(|f| f.blocks.is_empty()) {
+            continue;
+        }
+        let error = relative_mass_error(&path, &[]);
+        eprintln!("{}: mass error {:+.3} %", path.display(), 100.0 * error);
+        assert!(
+            error.abs() < 0.01,
+            "{}: mass off by {error:+.4}",
+            path.display()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 15, "only {checked} SPH scenes found");
+}
+
+/// Around a ball under water, the lattice's loss against the curved surface shrinks with the
+/// spacing.
+#[test]
+fn mass_around_an_obstacle_converges_with_spacing() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/abl_sph_moving_ball.toml");
+    let errors: Vec<Real> = [0.05, 0.025, 0.0125]
+        .iter()
+        .map(|s| relative_mass_error(&path, &[format!("fluid.spacing={s}")]).abs())
+        .collect();
+    eprintln!("mass errors {errors:?}");
+    assert!(errors[2] < errors[1] && errors[1] < errors[0], "{errors:?}");
+}

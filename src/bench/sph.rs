@@ -71,14 +71,15 @@ pub fn dam_break_scene(edge: usize, solver: PressureSolverKind) -> Scene {
 pub fn dam_break_scene_with(edge: usize, solver: PressureSolverKind, extra: &[String]) -> Scene {
     let text = include_str!("../../scenes/bench_dam_break.toml");
     let spacing = 0.0212 * 46.0 / edge as Real;
-    let side = edge as Real * spacing * (1.0 + 1e-9);
+    // The block starts 5 cm off the walls, as in the scene file.
+    let far = 0.05 + edge as Real * spacing * (1.0 + 1e-9);
     let solver = match solver {
         PressureSolverKind::Dfsph => "dfsph",
         PressureSolverKind::Iisph => "iisph",
     };
     let mut overrides = vec![
         format!("fluid.spacing={spacing}"),
-        format!("fluid.blocks.0.max=[{side}, {side}, {side}]"),
+        format!("fluid.blocks.0.max=[{far}, {far}, {far}]"),
         format!("pressure.solver=\"{solver}\""),
     ];
     overrides.extend_from_slice(extra);

@@ -44,7 +44,12 @@ pub struct Bounds {
 
 /// Runs one DFSPH solve on the velocities `v`. `density_ratio` is rho / rho_0 from the current
 /// neighbourhood, `factor` the DFSPH factors, `warm` the stored kappa dt^2 of this solve (read
-/// for the warm start and overwritten with this step's total).
+/// for the warm start and overwritten with this step's total). With `second_order`, the
+/// density solve adds dt^2 / 2 D^2(rho / rho_0)/Dt^2 to its prediction (see
+/// `Neighborhood::density_curvature`: a first-order prediction ends each step more compressed
+/// than it predicts when the velocities are noisy), evaluated once at the velocities the solve
+/// starts from: re-evaluated every iteration, as the IISPH solve does, the term grows with the
+/// corrections the Jacobi update makes and the tank diverged at a corner within four steps.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     nb: &Neighborhood,
@@ -55,8 +60,17 @@ pub fn solve(
     warm: &mut [Real],
     dt: Real,
     bounds: Bounds,
+    second_order: bool,
 ) -> SolveResult {
     let n = v.len();
+    let curvature: Vec<Real> = if second_order && which == Solve::Density {
+        v.par_iter()
+            .enumerate()
+            .map(|(i, _)| 0.5 * dt * dt * nb.density_curvature(i, v))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let error = |i: usize, v: &[Vec3]| -> Real {
         match which {
             Solve::Divergence => {
@@ -66,7 +80,10 @@ pub fn solve(
                     (dt * nb.density_rate(i, v, false)).max(0.0)
                 }
             }
-            Solve::Density => (density_ratio[i] + dt * nb.density_rate(i, v, false) - 1.0).max(0.0),
+            Solve::Density => {
+                let curved = curvature.get(i).copied().unwrap_or(0.0);
+                (density_ratio[i] + dt * nb.density_rate(i, v, false) + curved - 1.0).max(0.0)
+            }
         }
     };
     let inv_dt2 = 1.0 / (dt * dt);

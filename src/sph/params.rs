@@ -150,6 +150,10 @@ pub struct Pressure {
     /// Run the DFSPH divergence-free solver (ignored by IISPH).
     #[serde(default = "default_true")]
     pub divergence_solver: bool,
+    /// DFSPH: predict the density after the step to second order in dt (IISPH always does),
+    /// so the measured compression stays at the tolerance; costs a Hessian pass per iteration.
+    #[serde(default)]
+    pub second_order: bool,
     /// Least iterations per solve.
     #[serde(default = "default_min_iterations")]
     pub min_iterations: u32,
@@ -165,6 +169,7 @@ impl Default for Pressure {
             density_tolerance: default_density_tolerance(),
             divergence_tolerance: default_divergence_tolerance(),
             divergence_solver: true,
+            second_order: false,
             min_iterations: default_min_iterations(),
             max_iterations: default_max_iterations(),
         }

@@ -359,6 +359,7 @@ impl SphSolver {
                 kappa_v,
                 dt,
                 bounds(settings.divergence_tolerance),
+                false,
             );
             stats.divergence_seconds = start.elapsed().as_secs_f64();
             ran.push("divergence");
@@ -400,6 +401,7 @@ impl SphSolver {
                 kappa,
                 dt,
                 pressure_bounds,
+                settings.second_order,
             )
         } else {
             iisph::solve(
@@ -495,11 +497,16 @@ impl SphSolver {
         out.push((
             "pressure",
             format!(
-                "{} density solve, tolerance {} ({} to {} iterations)",
+                "{} density solve, tolerance {} ({} to {} iterations){}",
                 if dfsph { "DFSPH" } else { "IISPH" },
                 settings.density_tolerance,
                 settings.min_iterations,
-                settings.max_iterations
+                settings.max_iterations,
+                if !dfsph || settings.second_order {
+                    ", density predicted to second order in dt"
+                } else {
+                    ""
+                }
             ),
         ));
         out.push(("advect", "positions, then NaN and domain checks".into()));

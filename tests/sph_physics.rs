@@ -23,6 +23,19 @@ fn solver(scene: &Scene) -> SphSolver {
 
 const G: Real = 9.81;
 
+/// `dam_break.toml`'s column in a slab 0.1 m thick, run to `end` seconds.
+fn dam_break_slab(end: Real, extra: &[&str]) -> Scene {
+    let end = format!("time.end={end}");
+    let mut overrides = vec![
+        end.as_str(),
+        "container.shape.half_extents=[2.0, 0.5, 0.05]",
+        "container.position=[2.0, 0.5, 0.05]",
+        "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
+    ];
+    overrides.extend_from_slice(extra);
+    scene("scenes/dam_break.toml", &overrides)
+}
+
 /// Water at rest holds its column: a tank filled to the walls starts at the rest density, its
 /// centre of mass sinks less than a quarter spacing over 1.6 s (the column keeps its height
 /// within half a spacing) and its kinetic energy stays under 1 % of the potential energy (the
@@ -93,16 +106,7 @@ fn hydrostatic_tank_holds_its_column_at_rho_g_gradient() {
 /// first-order prediction measured 0.063 % against the 0.05 % it predicts.
 #[test]
 fn second_order_dfsph_holds_the_measured_compression_to_the_tolerance() {
-    let scene = scene(
-        "scenes/dam_break.toml",
-        &[
-            "time.end=0.5",
-            "container.shape.half_extents=[2.0, 0.5, 0.05]",
-            "container.position=[2.0, 0.5, 0.05]",
-            "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
-            "pressure.second_order=true",
-        ],
-    );
+    let scene = dam_break_slab(0.5, &["pressure.second_order=true"]);
     let tolerance = scene.pressure.density_tolerance;
     let mut s = solver(&scene);
     let (mut sum, mut steps) = (0.0, 0);
@@ -122,15 +126,7 @@ fn second_order_dfsph_holds_the_measured_compression_to_the_tolerance() {
 /// divergence solve leaves the velocity divergence of the interior under its tolerance.
 #[test]
 fn dfsph_solvers_meet_their_tolerances_in_the_dam_break() {
-    let scene = scene(
-        "scenes/dam_break.toml",
-        &[
-            "time.end=0.5",
-            "container.shape.half_extents=[2.0, 0.5, 0.05]",
-            "container.position=[2.0, 0.5, 0.05]",
-            "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
-        ],
-    );
+    let scene = dam_break_slab(0.5, &[]);
     let p = &scene.pressure;
     let mut s = solver(&scene);
     let mut steps = 0;
@@ -161,15 +157,7 @@ fn dfsph_solvers_meet_their_tolerances_in_the_dam_break() {
 /// 2 sqrt(2 g a), and kinetic plus potential energy never grows (no moving bodies here).
 #[test]
 fn dam_break_front_and_energy() {
-    let scene = scene(
-        "scenes/dam_break.toml",
-        &[
-            "time.end=0.8",
-            "container.shape.half_extents=[2.0, 0.5, 0.05]",
-            "container.position=[2.0, 0.5, 0.05]",
-            "fluid.blocks.0.max=[0.5, 1.0, 0.1]",
-        ],
-    );
+    let scene = dam_break_slab(0.8, &[]);
     let a = 0.5;
     let gravity = Vec3::from(scene.gravity);
     let mut s = solver(&scene);

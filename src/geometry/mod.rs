@@ -271,10 +271,11 @@ impl RigidBody {
     }
 
     /// Body-local points about `spacing` apart on the surface moved `offset` along its outward
-    /// normal (negative: into the solid), as [`Self::sample_surface`] samples it. Boxes,
-    /// spheres, cylinders and capsules are grown or shrunk exactly (a dimension stops at zero,
-    /// so a plate thinner than the offset is sampled on its mid-plane); mesh samples move along
-    /// the normal of their nearest surface point.
+    /// normal (negative: into the solid), as [`Self::sample_surface`] samples it. Spheres,
+    /// cylinders, capsules and shrunk boxes are resized exactly (a dimension stops at zero, so
+    /// a plate thinner than the offset is sampled on its mid-plane); a grown box's face grids
+    /// continue the columns of a lattice filling the box (`sampling::sample_box_shell`); mesh
+    /// samples move along the normal of their nearest surface point.
     ///
     /// # Panics
     /// As [`Self::sample_surface`].

@@ -64,9 +64,9 @@ pub fn solve(
 ) -> SolveResult {
     let n = v.len();
     let curvature: Vec<Real> = if second_order && which == Solve::Density {
-        v.par_iter()
-            .enumerate()
-            .map(|(i, _)| 0.5 * dt * dt * nb.density_curvature(i, v))
+        (0..n)
+            .into_par_iter()
+            .map(|i| 0.5 * dt * dt * nb.density_curvature(i, v))
             .collect()
     } else {
         Vec::new()

@@ -100,34 +100,24 @@ fn without_seeding_the_run_is_the_plain_grid_bit_for_bit() {
         seeded.step(None, None).expect("steps");
     }
     let (a, b, c) = (
-        plain.sim.grid.as_ref().expect("the test scene has it"),
-        quiet.sim.grid.as_ref().expect("the test scene has it"),
-        seeded.sim.grid.as_ref().expect("the test scene has it"),
+        common::grid(&plain),
+        common::grid(&quiet),
+        common::grid(&seeded),
     );
     for axis in 0..3 {
         assert!(a.mac.u[axis] == b.mac.u[axis], "velocity {axis} differs");
     }
     assert!(
-        a.smoke.as_ref().expect("the test scene has it").density
-            == b.smoke.as_ref().expect("the test scene has it").density
+        a.smoke.as_ref().expect("the scene has smoke").density
+            == b.smoke.as_ref().expect("the scene has smoke").density
     );
-    let t = seeded
-        .sim
-        .turbulence
-        .as_ref()
-        .expect("the test scene has it");
+    let t = common::turbulence(&seeded);
     assert!(!t.vortices.is_empty(), "c_p = 1e4 seeded nothing");
     assert!(
         a.mac.u[1] != c.mac.u[1],
         "the seeded particles changed nothing"
     );
-    assert!(quiet
-        .sim
-        .turbulence
-        .as_ref()
-        .expect("the test scene has it")
-        .vortices
-        .is_empty());
+    assert!(common::turbulence(&quiet).vortices.is_empty());
 }
 
 /// The wall-attached layer after the first step (of 1 us, so advection moves the field by 1e-5
@@ -163,15 +153,8 @@ fn the_wall_layer_is_the_lookup_for_the_relative_motion() {
     ] {
         let mut p = built(&scene_text.replace("cfl = 0.8", "cfl = 0.8\ndt = 1e-6"));
         p.step(None, None).expect("steps");
-        let grid = p.sim.grid.as_ref().expect("the test scene has it");
-        let abl = p
-            .sim
-            .turbulence
-            .as_ref()
-            .expect("the test scene has it")
-            .abl
-            .as_ref()
-            .expect("the test scene has it");
+        let grid = common::grid(&p);
+        let abl = common::abl_field(&p);
         let pose = grid.bodies[0].pose(0.0);
         let expected = db.lookup_world(&pose, &relative, &Vec3::zeros());
         let cells = boundary_cells(grid, 0);
@@ -186,7 +169,7 @@ fn the_wall_layer_is_the_lookup_for_the_relative_motion() {
                     let dj = (db.points()[j] - x).norm();
                     di.total_cmp(&dj)
                 })
-                .expect("the test scene has it");
+                .expect("the database has boundary points");
             let got = Vec3::new(abl[0][*c], abl[1][*c], abl[2][*c]);
             worst = worst.max((got - expected[nearest]).norm() / peak);
         }
@@ -209,18 +192,11 @@ fn an_abl_blob_moves_with_the_stream() {
         &common::abl_line(&db),
         "[turbulence]\nc_p = 0.0\ngain = 0.0",
     ));
-    let dx = p.sim.grid.as_ref().expect("the test scene has it").mac.dx;
+    let dx = common::grid(&p).mac.dx;
     let start = Vec3::new(1.0, 1.0, 1.0);
     let centroid = |p: &Pipeline| {
-        let grid = p.sim.grid.as_ref().expect("the test scene has it");
-        let w = &p
-            .sim
-            .turbulence
-            .as_ref()
-            .expect("the test scene has it")
-            .abl
-            .as_ref()
-            .expect("the test scene has it")[2];
+        let grid = common::grid(p);
+        let w = &common::abl_field(p)[2];
         let (mut sum, mut weighted) = (0.0, Vec3::zeros());
         for (idx, &v) in w.indexed_iter() {
             let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
@@ -230,15 +206,15 @@ fn an_abl_blob_moves_with_the_stream() {
         weighted / sum
     };
     {
-        let grid = p.sim.grid.as_ref().expect("the test scene has it");
+        let grid = p.sim.grid.as_ref().expect("the scene has a grid");
         let w = &mut p
             .sim
             .turbulence
             .as_mut()
-            .expect("the test scene has it")
+            .expect("the scene has turbulence stages")
             .abl
             .as_mut()
-            .expect("the test scene has it")[2];
+            .expect("a grid scene carries omega_ABL on its cells")[2];
         for (idx, v) in w.indexed_iter_mut() {
             let x = grid.mac.cell_center([idx.0, idx.1, idx.2]);
             *v = (-(x - start).norm_squared() / (2.0 * (2.0 * dx).powi(2))).exp();
@@ -265,7 +241,7 @@ fn the_mixing_length_is_the_distance_to_the_nearest_wall() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
     let p = built(&text(CENTRE, &common::abl_line(&db), ""));
-    let grid = p.sim.grid.as_ref().expect("the test scene has it");
+    let grid = common::grid(&p);
     let d = wall_distance(grid);
     let c = Vec3::from(CENTRE);
     for (idx, &got) in d.indexed_iter() {
@@ -472,29 +448,22 @@ fn a_static_flow_carries_the_smoke_and_is_never_projected() {
     let stored = format!("static_flow = {:?}", frames.display().to_string());
     let text = lid_scene(&stored);
     let mut p = built(&text);
-    let frozen = p
-        .sim
-        .grid
-        .as_ref()
-        .expect("the test scene has it")
-        .mac
-        .u
-        .clone();
+    let frozen = common::grid(&p).mac.u.clone();
     let speed = frozen[0].iter().fold(0.0, |m: Real, v| m.max(v.abs()));
     assert!(speed > 0.1, "the stored flow is still: {speed}");
     for _ in 0..10 {
         let dt = p.sim.stable_dt().expect("dt");
-        let grid = p.sim.grid.as_ref().expect("the test scene has it");
-        let before = &grid.smoke.as_ref().expect("the test scene has it").density;
+        let grid = common::grid(&p);
+        let before = &grid.smoke.as_ref().expect("the scene has smoke").density;
         let scheme = eddy::grid::Advection::Maccormack;
         let expected = advect(before, grid.mac.cell_stagger(), &grid.mac, dt, scheme);
         p.step(None, None).expect("steps");
-        let grid = p.sim.grid.as_ref().expect("the test scene has it");
+        let grid = common::grid(&p);
         assert!(
             grid.mac.u == frozen,
             "the velocity drifted from the stored field"
         );
-        let smoke = &grid.smoke.as_ref().expect("the test scene has it").density;
+        let smoke = &grid.smoke.as_ref().expect("the scene has smoke").density;
         for (got, want) in smoke.iter().zip(&expected) {
             assert!(*got == 1.0 || got == want, "smoke {got} against {want}");
         }
@@ -510,7 +479,7 @@ fn a_static_flow_carries_the_smoke_and_is_never_projected() {
         .stages
         .iter()
         .find(|s| s.name == "grid")
-        .expect("the test scene has it");
+        .expect("the plan has a grid stage");
     let parts: Vec<&str> = grid.parts.iter().map(|(n, _)| *n).collect();
     assert!(
         parts.contains(&"static flow") && !parts.contains(&"pressure"),
@@ -555,20 +524,14 @@ fn synthesis_upsampling_is_wired_through() {
         parts
             .iter()
             .find(|(n, _)| *n == "synthesis")
-            .expect("the test scene has it")
+            .expect("the turbulence stage has a synthesis part")
             .1
             .clone()
     };
     assert!(line(&two).contains("2x finer"), "{}", line(&two));
-    let (a, b) = (
-        one.sim.turbulence.as_ref().expect("the test scene has it"),
-        two.sim.turbulence.as_ref().expect("the test scene has it"),
-    );
+    let (a, b) = (common::turbulence(&one), common::turbulence(&two));
     assert!(!a.vortices.is_empty() && !b.vortices.is_empty());
-    let (ga, gb) = (
-        one.sim.grid.as_ref().expect("the test scene has it"),
-        two.sim.grid.as_ref().expect("the test scene has it"),
-    );
+    let (ga, gb) = (common::grid(&one), common::grid(&two));
     assert!(ga.mac.u[1] != gb.mac.u[1], "upsampling changed nothing");
     let e = scene(&text(
         CENTRE,

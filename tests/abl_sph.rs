@@ -92,7 +92,12 @@ fn carried<'a>(sph: &'a SphSolver, name: &str) -> &'a [Vec3] {
 /// Tags every fluid particle with its index as a carried field, so it can be followed through
 /// the solver's reordering.
 fn tag(p: &mut Pipeline) {
-    let fluid = &mut p.sim.sph.as_mut().expect("the test scene has it").fluid;
+    let fluid = &mut p
+        .sim
+        .sph
+        .as_mut()
+        .expect("the scene has an SPH fluid")
+        .fluid;
     let i = fluid.carry("test_id");
     let ids = &mut fluid.carried[i].1;
     for (k, id) in ids.iter_mut().enumerate() {
@@ -129,13 +134,7 @@ fn without_seeding_the_run_is_the_plain_sph_bit_for_bit() {
         abl.iter().any(|w| *w != Vec3::zeros()),
         "the layer was attached"
     );
-    assert!(quiet
-        .sim
-        .turbulence
-        .as_ref()
-        .expect("the test scene has it")
-        .vortices
-        .is_empty());
+    assert!(common::turbulence(&quiet).vortices.is_empty());
 }
 
 /// At the first step every particle within the layer (two spacings) of the ball takes the
@@ -262,7 +261,7 @@ steps = 1
 resolution = [20, 20, 20]
 "#;
     let g = built(grid_text);
-    let grid = g.sim.grid.as_ref().expect("the test scene has it");
+    let grid = common::grid(&g);
     let distance = eddy::grid::walls::wall_distance(grid);
     let mut cells = SeedSamples::default();
     let dx = grid.mac.dx;
@@ -332,12 +331,7 @@ fn vortex_kernels_stay_inside_the_liquid() {
         };
         p.step(None, None).expect("steps");
         let s = sph(&p);
-        let v = &p
-            .sim
-            .turbulence
-            .as_ref()
-            .expect("the test scene has it")
-            .vortices;
+        let v = &common::turbulence(&p).vortices;
         seen = seen.max(v.len());
         let nearest = |points: &[Vec3], x: &Vec3| {
             points
@@ -386,13 +380,7 @@ fn it_composes_with_a_refinement() {
     let parts = |prefix: &str| trace.iter().filter(|t| t.starts_with(prefix)).count();
     assert_eq!(parts("turbulence/"), 3 * 5, "{trace:?}");
     assert!(trace.iter().any(|t| t == "sph/refine"), "{trace:?}");
-    assert!(!p
-        .sim
-        .turbulence
-        .as_ref()
-        .expect("the test scene has it")
-        .vortices
-        .is_empty());
+    assert!(!common::turbulence(&p).vortices.is_empty());
 }
 
 /// A database for another ball is refused with both fingerprints named.

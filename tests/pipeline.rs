@@ -106,8 +106,8 @@ fn grid_and_fluid_share_one_clock() {
         assert_eq!(rec.sph.expect("sph stepped").dt, rec.dt);
         assert_eq!(rec.grid.expect("grid stepped").dt, rec.dt);
         let (sph, grid) = (
-            p.sim.sph.as_ref().expect("the test scene has it"),
-            p.sim.grid.as_ref().expect("the test scene has it"),
+            p.sim.sph.as_ref().expect("the scene has an SPH fluid"),
+            p.sim.grid.as_ref().expect("the scene has a grid"),
         );
         assert_eq!(sph.time(), p.sim.time());
         assert_eq!(grid.time(), p.sim.time());

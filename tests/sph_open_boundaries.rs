@@ -167,7 +167,12 @@ fn refinements_and_carried_fields_follow_the_count() {
         );
         let mut p = built(&channel(l, hh, w, h, u, &extra));
         let tagged = {
-            let fluid = &mut p.sim.sph.as_mut().expect("the test scene has it").fluid;
+            let fluid = &mut p
+                .sim
+                .sph
+                .as_mut()
+                .expect("the scene has an SPH fluid")
+                .fluid;
             let i = fluid.carry("tag");
             fluid.carried[i]
                 .1

@@ -99,3 +99,27 @@ pub fn built(text: &str, name: &str) -> eddy::pipeline::Pipeline {
     let _serial = hdf5_or_child();
     eddy::pipeline::Pipeline::build(&scene).expect("the pipeline builds")
 }
+
+/// The MAC-grid solver of a pipeline whose scene has a grid.
+#[allow(dead_code)]
+pub fn grid(p: &eddy::pipeline::Pipeline) -> &eddy::grid::GridSolver {
+    p.sim.grid.as_ref().expect("the scene has a grid")
+}
+
+/// The boundary-layer turbulence state of a pipeline whose scene has an `abl` obstacle.
+#[allow(dead_code)]
+pub fn turbulence(p: &eddy::pipeline::Pipeline) -> &eddy::pipeline::Turbulence {
+    p.sim
+        .turbulence
+        .as_ref()
+        .expect("the scene has turbulence stages")
+}
+
+/// omega_ABL on the grid of a grid scene with boundary layers, one array per component.
+#[allow(dead_code)]
+pub fn abl_field(p: &eddy::pipeline::Pipeline) -> &[ndarray::Array3<eddy::Real>; 3] {
+    turbulence(p)
+        .abl
+        .as_ref()
+        .expect("a grid scene carries omega_ABL on its cells")
+}

@@ -11,7 +11,6 @@
 //! values) or FAILED (the error, UTF-8) per direction; rank 0 answers each with JOB (kind,
 //! polar, azimuth as u64) or STOP.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -22,7 +21,7 @@ use mpi::point_to_point::{Destination, MatchedReceiveVec, Source};
 use mpi::topology::{Communicator, SimpleCommunicator};
 use mpi::Tag;
 
-use crate::run::{compute_job, Engine, Finished, Job};
+use crate::run::{compute_job, Engine, Finished, Job, JobQueue};
 use crate::solve::Surface;
 use crate::spec::ObstacleSpec;
 
@@ -50,29 +49,10 @@ impl Engine for Root<'_> {
         deliver: &mut dyn FnMut(Finished) -> bool,
     ) {
         let world = self.world;
-        let next = AtomicUsize::new(0);
-        let stop = AtomicBool::new(false);
-        let take = || {
-            if stop.load(Ordering::Relaxed) {
-                return None;
-            }
-            todo.get(next.fetch_add(1, Ordering::Relaxed)).copied()
-        };
+        let queue = &JobQueue::new(todo);
         let (tx, rx) = mpsc::channel::<Finished>();
         std::thread::scope(|scope| {
-            scope.spawn(|| {
-                while let Some(job) = take() {
-                    let started = Instant::now();
-                    let result = compute_job(spec, surface, &job);
-                    if tx
-                        .send((job, result, started.elapsed().as_secs_f64()))
-                        .is_err()
-                    {
-                        break;
-                    }
-                }
-                drop(tx);
-            });
+            scope.spawn(move || queue.work(spec, surface, &tx));
             let mut in_flight: Vec<Option<Job>> = vec![None; world.size() as usize];
             let mut remote = world.size() - 1;
             let mut local = true;
@@ -80,7 +60,7 @@ impl Engine for Root<'_> {
                 match rx.try_recv() {
                     Ok(finished) => {
                         if !deliver(finished) {
-                            stop.store(true, Ordering::Relaxed);
+                            queue.stop();
                         }
                         continue;
                     }
@@ -110,11 +90,11 @@ impl Engine for Root<'_> {
                 };
                 if let Some(finished) = finished {
                     if !deliver(finished) {
-                        stop.store(true, Ordering::Relaxed);
+                        queue.stop();
                     }
                 }
                 let to = world.process_at_rank(from);
-                match take() {
+                match queue.take() {
                     Some(job) => {
                         let kind = u64::from(job.kind == MotionKind::Rotation);
                         to.send_with_tag(&[kind, job.polar as u64, job.azimuth as u64][..], JOB);

@@ -116,6 +116,54 @@ pub fn compute_job(spec: &ObstacleSpec, surface: &Surface, job: &Job) -> anyhow:
     pool.install(|| solve(spec, surface, job.kind, &d))
 }
 
+/// The jobs of a run, handed out one at a time (to threads or ranks) until they run out or the
+/// run is stopped.
+pub struct JobQueue<'a> {
+    todo: &'a [Job],
+    next: AtomicUsize,
+    stopped: AtomicBool,
+}
+
+impl<'a> JobQueue<'a> {
+    pub fn new(todo: &'a [Job]) -> Self {
+        Self {
+            todo,
+            next: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+        }
+    }
+
+    /// The next job, or `None` once all are handed out or the run is stopped.
+    pub fn take(&self) -> Option<Job> {
+        if self.stopped.load(Ordering::Relaxed) {
+            return None;
+        }
+        self.todo
+            .get(self.next.fetch_add(1, Ordering::Relaxed))
+            .copied()
+    }
+
+    /// Hands out no more jobs.
+    pub fn stop(&self) {
+        self.stopped.store(true, Ordering::Relaxed);
+    }
+
+    /// Computes jobs on this thread, sending each to `tx` as it finishes, until the queue is
+    /// done or nobody receives.
+    pub fn work(&self, spec: &ObstacleSpec, surface: &Surface, tx: &mpsc::Sender<Finished>) {
+        while let Some(job) = self.take() {
+            let started = Instant::now();
+            let result = compute_job(spec, surface, &job);
+            if tx
+                .send((job, result, started.elapsed().as_secs_f64()))
+                .is_err()
+            {
+                break;
+            }
+        }
+    }
+}
+
 /// `workers` directions at once, one thread each, pulling the next job when done.
 pub struct Threads {
     pub workers: usize,
@@ -129,28 +177,17 @@ impl Engine for Threads {
         todo: &[Job],
         deliver: &mut dyn FnMut(Finished) -> bool,
     ) {
-        let next = AtomicUsize::new(0);
-        let stop = AtomicBool::new(false);
+        let queue = &JobQueue::new(todo);
         let (tx, rx) = mpsc::channel::<Finished>();
         std::thread::scope(|scope| {
             for _ in 0..self.workers.max(1).min(todo.len().max(1)) {
                 let tx = tx.clone();
-                let (next, stop) = (&next, &stop);
-                scope.spawn(move || {
-                    while !stop.load(Ordering::Relaxed) {
-                        let Some(&job) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
-                            break;
-                        };
-                        let started = Instant::now();
-                        let result = compute_job(spec, surface, &job);
-                        let _ = tx.send((job, result, started.elapsed().as_secs_f64()));
-                    }
-                });
+                scope.spawn(move || queue.work(spec, surface, &tx));
             }
             drop(tx);
             for finished in rx {
                 if !deliver(finished) {
-                    stop.store(true, Ordering::Relaxed);
+                    queue.stop();
                 }
             }
         });

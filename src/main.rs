@@ -59,6 +59,9 @@ enum Command {
     /// Run time against error of the artificial boundary layers (Pfaff et al. Figure 8): the
     /// backward-facing step with ABL seeding, random seeding and none, against a finer plain run.
     BenchAbl(cli::bench::AblBenchArgs),
+    /// What the exchange of a coupled grid + SPH scene costs: the coupled step against its grid
+    /// and its SPH fluid stepped alone, in alternating rounds, and the coupled step by stage.
+    BenchCoupling(cli::bench::CouplingBenchArgs),
     /// Plot energy and vorticity against time for several runs into one PNG.
     Compare {
         /// Run output folders (each with a metrics.csv).
@@ -137,6 +140,10 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::BenchAbl(args) => {
             let rows = eddy::bench::abl::run(&args.scene.clone(), &args.into())?;
             print!("{}", eddy::bench::abl::table(&rows));
+        }
+        Command::BenchCoupling(args) => {
+            let bench = eddy::bench::coupling::run(&args.scene.clone(), &args.into())?;
+            print!("{}", eddy::bench::coupling::table(&bench));
         }
         Command::Compare { runs, out } => {
             let series = runs

@@ -31,11 +31,11 @@ fn traced(file: &str, overrides: &[&str], steps: u64) -> (Vec<String>, Vec<Strin
 }
 
 /// Every step runs exactly the stages and parts the plan lists, in its order, for a grid
-/// scene, SPH scenes with and without a refinement and with parts switched off, and a scene
-/// with both solvers.
+/// scene, SPH scenes with and without a refinement and with parts switched off, a scene with
+/// both solvers, and a coupled one.
 #[test]
 fn the_plan_is_what_runs() {
-    let cases: [(&str, &[&str]); 7] = [
+    let cases: [(&str, &[&str]); 8] = [
         ("lid_driven_cavity.toml", &[]),
         ("smoke_plume.toml", &["grid.resolution=[16,16,16]"]),
         ("dam_break.toml", &[]),
@@ -49,6 +49,7 @@ fn the_plan_is_what_runs() {
             &["refinement.method=\"mcvsph\""],
         ),
         ("coupled_tank_and_plume.toml", &[]),
+        ("coupled_wind_over_tank.toml", &["fluid.spacing=0.025"]),
     ];
     for (file, overrides) in cases {
         let steps = 4;
@@ -290,6 +291,7 @@ fn solvers_build_from_parameters_alone() {
         pressure: Default::default(),
         smoke: None,
         average_from: None,
+        container: false,
     };
     let mut g = GridSolver::new(&grid, Vec::new()).expect("grid builds");
     for _ in 0..5 {

@@ -85,6 +85,7 @@ pub fn grid(
         },
         smoke: None,
         average_from: None,
+        container: false,
     };
     Ok((params, spec.body_entry(angular)))
 }

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use eddy::bench::abl::AblBenchOptions;
+use eddy::bench::coupling::CouplingBenchOptions;
 use eddy::bench::grid::GridBenchOptions;
 use eddy::bench::BenchOptions;
 
@@ -122,6 +123,37 @@ impl From<AblBenchArgs> for AblBenchOptions {
             profiles: a.profiles,
             plot: a.plot,
             seeds: a.seeds,
+        }
+    }
+}
+
+/// Options of `eddy bench-coupling`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CouplingBenchArgs {
+    /// A coupled scene (with `[coupling]`).
+    #[arg(default_value = "scenes/coupled_wind_over_tank.toml")]
+    pub scene: PathBuf,
+    /// Override a scene key in every run, e.g. --set fluid.spacing=0.01 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Steps of each run before timing starts.
+    #[arg(long, default_value_t = 5)]
+    pub warmup: u64,
+    /// Timed steps of each run per round.
+    #[arg(long, default_value_t = 20)]
+    pub steps: u64,
+    /// Rounds of (coupled, grid alone, SPH alone), alternating.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
+    pub rounds: u64,
+}
+
+impl From<CouplingBenchArgs> for CouplingBenchOptions {
+    fn from(a: CouplingBenchArgs) -> Self {
+        CouplingBenchOptions {
+            overrides: a.set,
+            warmup: a.warmup,
+            steps: a.steps,
+            rounds: a.rounds,
         }
     }
 }

@@ -7,6 +7,7 @@ use ndarray::{s, Array3, Axis, Zip};
 use rayon::prelude::*;
 
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
+use super::liquid::Liquid;
 use super::mac::{cells_beside_face, MacGrid};
 use super::params::GridSide;
 use super::poisson::{Boundary, CellKind, Side};
@@ -16,12 +17,16 @@ use crate::{Point3, Real, Vec3};
 /// Owner value of a cell no obstacle covers.
 const FLUID: u16 = u16::MAX;
 
+/// Owner value of a cell a coupled liquid covers (see [`Liquid`]).
+const LIQUID: u16 = u16::MAX - 1;
+
 /// The grid's boundary state at one time.
 #[derive(Debug, Clone)]
 pub struct Boundaries {
     /// The domain's sides, `[axis][0 = min, 1 = max]`.
     pub sides: [[GridSide; 2]; 3],
-    /// Index of the obstacle whose inside holds each cell centre, or `u16::MAX` for fluid.
+    /// Index of the obstacle whose inside holds each cell centre, `LIQUID` under a coupled
+    /// liquid, or `FLUID`.
     owner: Array3<u16>,
     /// Faces whose velocity is prescribed, per component.
     pub fixed: [Array3<bool>; 3],
@@ -33,9 +38,50 @@ pub struct Boundaries {
 }
 
 impl Boundaries {
-    /// Voxelises `bodies` at time `t` and classifies every face.
-    pub fn new(grid: &MacGrid, sides: [[GridSide; 2]; 3], bodies: &[RigidBody], t: Real) -> Self {
-        let owner = voxelize(grid, bodies, t);
+    /// Voxelises `bodies` at time `t` (with `container`, the first body holds the fluid: the
+    /// cells outside it are its) and the cells `liquid` covers, and classifies every face.
+    pub fn new(
+        grid: &MacGrid,
+        sides: [[GridSide; 2]; 3],
+        bodies: &[RigidBody],
+        t: Real,
+        container: bool,
+        liquid: Option<&Liquid>,
+    ) -> Self {
+        let owner = voxelize(grid, bodies, t, container);
+        Self::from_owner(grid, sides, owner, bodies, t, liquid)
+    }
+
+    /// These boundaries with the coupled liquid replaced by `liquid`, the obstacles where they
+    /// are (for static obstacles: no signed distance is evaluated again).
+    pub fn with_liquid(
+        &self,
+        grid: &MacGrid,
+        bodies: &[RigidBody],
+        t: Real,
+        liquid: Option<&Liquid>,
+    ) -> Self {
+        let owner = self.owner.mapv(|o| if o == LIQUID { FLUID } else { o });
+        Self::from_owner(grid, self.sides.clone(), owner, bodies, t, liquid)
+    }
+
+    fn from_owner(
+        grid: &MacGrid,
+        sides: [[GridSide; 2]; 3],
+        mut owner: Array3<u16>,
+        bodies: &[RigidBody],
+        t: Real,
+        liquid: Option<&Liquid>,
+    ) -> Self {
+        if let Some(liquid) = liquid {
+            Zip::from(&mut owner)
+                .and(&liquid.cells)
+                .par_for_each(|o, &covered| {
+                    if covered && *o == FLUID {
+                        *o = LIQUID;
+                    }
+                });
+        }
         let mut b = Self {
             sides,
             owner,
@@ -43,13 +89,18 @@ impl Boundaries {
             fixed_value: std::array::from_fn(|a| Array3::zeros(grid.u[a].raw_dim())),
             inside: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
         };
-        b.classify_faces(grid, bodies, t);
+        b.classify_faces(grid, bodies, t, liquid);
         b
     }
 
-    /// Whether cell `idx` is inside an obstacle.
+    /// Whether cell `idx` is inside an obstacle or under the coupled liquid.
     pub fn is_solid(&self, idx: [usize; 3]) -> bool {
         self.owner[idx] != FLUID
+    }
+
+    /// Whether cell `idx` is under the coupled liquid (and in no obstacle).
+    pub fn is_liquid(&self, idx: [usize; 3]) -> bool {
+        self.owner[idx] == LIQUID
     }
 
     /// True for the cells the fluid occupies.
@@ -65,7 +116,7 @@ impl Boundaries {
     /// The obstacle covering cell `idx`, if any.
     pub fn owner(&self, idx: [usize; 3]) -> Option<usize> {
         let o = self.owner[idx];
-        (o != FLUID).then_some(o as usize)
+        (o != FLUID && o != LIQUID).then_some(o as usize)
     }
 
     /// The cell kinds of the pressure solve.
@@ -217,7 +268,14 @@ impl Boundaries {
 
     /// Marks the fixed faces of every component and their velocities, a row of faces along z
     /// at a time over flat slices (a moving obstacle reclassifies every face on every step).
-    fn classify_faces(&mut self, grid: &MacGrid, bodies: &[RigidBody], t: Real) {
+    /// An obstacle's velocity comes first, then a side's, then the liquid's.
+    fn classify_faces(
+        &mut self,
+        grid: &MacGrid,
+        bodies: &[RigidBody],
+        t: Real,
+        liquid: Option<&Liquid>,
+    ) {
         let [_, n1, n2] = grid.dims;
         let owner = self
             .owner
@@ -247,6 +305,11 @@ impl Boundaries {
                     .expect("face arrays are in standard layout")
                     .par_chunks_mut(len.max(1))
             }
+            let liquid_faces = liquid.map(|l| {
+                l.face_velocity[a]
+                    .as_slice()
+                    .expect("face arrays are in standard layout")
+            });
             slabs(&mut self.fixed[a], m1 * m2)
                 .zip(slabs(&mut self.fixed_value[a], m1 * m2))
                 .zip(slabs(&mut self.inside[a], m1 * m2))
@@ -282,11 +345,14 @@ impl Boundaries {
                             } else {
                                 (lo.map(|r| r[k]), hi.map(|r| r[k]))
                             };
-                            let solid = [left, right].into_iter().flatten().find(|&o| o != FLUID);
+                            let beside = [left, right].into_iter().flatten();
+                            let solid = beside.clone().find(|&o| o != FLUID && o != LIQUID);
+                            let wet = beside.clone().any(|o| o == LIQUID);
                             let f = j * m2 + k;
+                            let is_static = |o: u16| o != LIQUID && !moving[o as usize];
                             inside[f] = match (left, right) {
                                 (Some(l), Some(r)) => {
-                                    l != FLUID && r != FLUID && !moving[l as usize]
+                                    l != FLUID && r != FLUID && is_static(l) && is_static(r)
                                 }
                                 _ => false,
                             };
@@ -306,6 +372,8 @@ impl Boundaries {
                                         )
                                         .map(|v| v[a]),
                                 }
+                            } else if wet {
+                                liquid_faces.map(|l| l[(i * m1 + j) * m2 + k])
                             } else {
                                 None
                             };
@@ -320,10 +388,19 @@ impl Boundaries {
 
 /// The obstacle index of every cell whose centre lies inside one (the last body listed wins
 /// where bodies overlap), `FLUID` elsewhere. Only the cells under each body's bounding box are
-/// tested.
-fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real) -> Array3<u16> {
+/// tested; with `container` the first body owns the cells outside it instead.
+fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real, container: bool) -> Array3<u16> {
     let mut owner = Array3::from_elem(grid.dims, FLUID);
-    for (index, body) in bodies.iter().enumerate() {
+    if let Some(tank) = bodies.first().filter(|_| container) {
+        let pose = tank.pose(t);
+        Zip::indexed(&mut owner).par_for_each(|(i, j, k), o| {
+            let c = Point3::from(grid.cell_center([i, j, k]));
+            if tank.signed_distance_local(&pose.inverse_transform_point(&c)) > 0.0 {
+                *o = 0;
+            }
+        });
+    }
+    for (index, body) in bodies.iter().enumerate().skip(usize::from(container)) {
         let [rx, ry, rz] = cells_near(grid, body, t, 0.0);
         let (x0, y0, z0) = (rx.start, ry.start, rz.start);
         let pose = body.pose(t);

@@ -85,6 +85,25 @@ impl Stagger {
         self.sample_slice(standard(field), g)
     }
 
+    /// The eight samples around position `g` (cell units from the grid origin) with their
+    /// trilinear weights, x fastest: the transpose of [`Self::sample`], for spreading a
+    /// quantity onto the samples it is read from. A clamped end repeats a sample at weight 0.
+    pub fn weights(&self, g: [Real; 3]) -> [([usize; 3], Real); 8] {
+        let w = [self.axis(0, g[0]), self.axis(1, g[1]), self.axis(2, g[2])];
+        std::array::from_fn(|c| {
+            let pick = |a: usize| {
+                let (lo, hi, f) = w[a];
+                if (c >> a) & 1 == 1 {
+                    (hi, f)
+                } else {
+                    (lo, 1.0 - f)
+                }
+            };
+            let (x, y, z) = (pick(0), pick(1), pick(2));
+            ([x.0, y.0, z.0], x.1 * y.1 * z.1)
+        })
+    }
+
     /// The axis whose faces the samples sit on, or None for cell centres.
     pub fn face_axis(&self) -> Option<usize> {
         (0..3).find(|&a| self.offset[a] == 0.0)
@@ -233,6 +252,33 @@ mod tests {
             }
             if len > 1 {
                 assert!(axis_weights(Real::NAN, len, None).2.is_nan());
+            }
+        }
+    }
+
+    /// Spreading with [`Stagger::weights`] is the transpose of sampling: the weighted sum of a
+    /// field's samples at the eight indices is the sampled value, on clamped and periodic
+    /// axes, at random points inside and beyond the grid, and the weights sum to one.
+    #[test]
+    fn weights_are_the_samples_of_interpolation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let dims = [5, 4, 3];
+        for (axis, periodic) in [(0, [false; 3]), (1, [true, false, true]), (2, [true; 3])] {
+            let stagger = Stagger::faces(dims, periodic, axis);
+            let field = Array3::from_shape_fn(stagger.shape, |_| rng.random_range(-1.0..1.0));
+            for _ in 0..500 {
+                let g = std::array::from_fn(|a| rng.random_range(-1.0..dims[a] as Real + 1.0));
+                let w = stagger.weights(g);
+                let spread: Real = w.iter().map(|(idx, w)| w * field[*idx]).sum();
+                let total: Real = w.iter().map(|(_, w)| w).sum();
+                assert!(
+                    (spread - stagger.sample(&field, g)).abs() < 1e-12,
+                    "at {g:?}"
+                );
+                assert!(
+                    (total - 1.0).abs() < 1e-12,
+                    "weights sum to {total} at {g:?}"
+                );
             }
         }
     }

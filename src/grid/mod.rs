@@ -11,6 +11,7 @@ pub mod diffusion;
 pub mod forces;
 pub mod interp;
 mod layout;
+pub mod liquid;
 pub mod mac;
 mod multigrid;
 pub mod params;
@@ -28,6 +29,7 @@ pub use average::RunningAverage;
 pub use boundary::Boundaries;
 pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, DiffusionSystem};
 pub use interp::Stagger;
+pub use liquid::Liquid;
 pub use mac::MacGrid;
 pub use params::{
     Advection, GridBoundary, GridParams, GridSide, InflowProfile, ProfileShape, Smoke, SmokeSource,

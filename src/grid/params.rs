@@ -47,6 +47,9 @@ pub struct GridParams {
     pub smoke: Option<Smoke>,
     /// Start of the time-averaged velocity, s; none kept when None.
     pub average_from: Option<Real>,
+    /// The first body is a container holding the fluid (a coupled scene's tank): the cells
+    /// outside it are solid, those inside fluid.
+    pub container: bool,
 }
 
 /// Advection scheme of velocity and scalars.

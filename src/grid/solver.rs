@@ -119,6 +119,10 @@ pub struct GridSolver {
     /// The stored face velocities of the static flow-field mode (Pfaff et al. 2009, Figure 11),
     /// restored at the end of every step; `None` for a solved flow.
     frozen: Option<[Array3<Real>; 3]>,
+    /// The coupled liquid, a moving solid to this grid (see [`Self::set_liquid`]).
+    pub(super) liquid: Option<super::liquid::Liquid>,
+    /// Face velocity changes from outside, applied in the next step's forces.
+    pub(super) impulses: Option<[Array3<Real>; 3]>,
     /// Against gravity (y without gravity): the direction smoke rises.
     up: Vec3,
     /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
@@ -138,7 +142,7 @@ impl GridSolver {
         for (a, u) in mac.u.iter_mut().enumerate() {
             u.fill(params.initial_velocity[a]);
         }
-        let bounds = Boundaries::new(&mac, sides, &bodies, 0.0);
+        let bounds = Boundaries::new(&mac, sides, &bodies, 0.0, params.container, None);
         if bounds.fluid_cells() == 0 {
             let body = bodies
                 .first()
@@ -175,6 +179,8 @@ impl GridSolver {
             ran: Vec::new(),
             params: params.clone(),
             frozen: None,
+            liquid: None,
+            impulses: None,
             time: 0.0,
             step: 0,
         })
@@ -234,13 +240,7 @@ impl GridSolver {
         self.ran.clear();
         if self.bodies.iter().any(RigidBody::is_moving) {
             self.ran.push("obstacles");
-            let sides = self.bounds.sides.clone();
-            self.bounds = Boundaries::new(&self.mac, sides, &self.bodies, self.time + dt);
-            let cells = self.bounds.cell_kinds();
-            if cells != self.system_cells {
-                self.system = PoissonSystem::new(&cells, self.bounds.pressure_boundary());
-                self.system_cells = cells;
-            }
+            self.rebuild_boundaries(self.time + dt);
         }
 
         let t0 = Instant::now();
@@ -294,6 +294,24 @@ impl GridSolver {
         self.check_finite()?;
         stats.total_seconds = started.elapsed().as_secs_f64();
         Ok(stats)
+    }
+
+    /// Voxelises the obstacles at `t` and the coupled liquid, and rebuilds the pressure system
+    /// when the solid cells changed.
+    pub(super) fn rebuild_boundaries(&mut self, t: Real) {
+        let liquid = self.liquid.as_ref();
+        self.bounds = if self.bodies.iter().any(RigidBody::is_moving) {
+            let sides = self.bounds.sides.clone();
+            let container = self.params.container;
+            Boundaries::new(&self.mac, sides, &self.bodies, t, container, liquid)
+        } else {
+            self.bounds.with_liquid(&self.mac, &self.bodies, t, liquid)
+        };
+        let cells = self.bounds.cell_kinds();
+        if cells != self.system_cells {
+            self.system = PoissonSystem::new(&cells, self.bounds.pressure_boundary());
+            self.system_cells = cells;
+        }
     }
 
     /// The parts the last [`Self::advance`] ran, in order.
@@ -540,11 +558,13 @@ impl GridSolver {
         self.smoke.is_some() || self.params.confinement > 0.0 || self.params.gravity_force
     }
 
-    /// Buoyancy and vorticity confinement, and the smoke sources.
+    /// Buoyancy and vorticity confinement, and the smoke sources; and the impulses added from
+    /// outside since the last step ([`Self::add_face_impulse`]).
     fn apply_forces(&mut self, dt: Real) {
         if self.has_forces() {
             self.ran.push("forces");
         }
+        self.apply_impulses();
         if let Some(smoke) = self.smoke.as_mut() {
             apply_sources(smoke, &mut self.mac, &self.bounds);
             if smoke.buoyancy != 0.0 || smoke.heat_buoyancy != 0.0 {

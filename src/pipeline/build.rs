@@ -2,7 +2,9 @@
 //! outputs it writes. A stage that nothing in the scene needs is not built, so it cannot run.
 
 use std::path::Path;
+use std::time::Instant;
 
+use super::coupling::{SurfaceExchange, SurfacePressure};
 use super::footprint::{available_memory, Footprint};
 use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames};
 use super::simulation::{Simulation, StepError};
@@ -32,6 +34,8 @@ pub struct Pipeline {
     pub frames: Frames,
     /// Grid line probes, written as `profile_NAME.csv` at the end: (name, from, to, points).
     pub profiles: Vec<(String, Vec3, Vec3, usize)>,
+    /// Wall time each stage has run for so far, s, in the order of `stages`.
+    pub stage_seconds: Vec<f64>,
 }
 
 /// The frame writers a scene asked for, opened with [`Pipeline::open`].
@@ -238,14 +242,29 @@ impl Pipeline {
             Some(t) if sim.grid.is_some() => (Some(t), None),
             t => (None, t),
         };
-        if sim.sph.is_some() {
-            stages.extend(sph_turbulence);
-            stages.push(Box::new(SphStep));
-            stages.push(Box::new(SphNeighbours));
-        }
-        if sim.grid.is_some() {
-            stages.extend(grid_turbulence);
-            stages.push(Box::new(GridStep));
+        match scene.coupling.clone().filter(|_| has_sph && has_grid) {
+            // The water is the air's boundary for the step, the air's pressure on it is known
+            // after the grid's projection, and both reach the particles before they move.
+            Some(coupling) => {
+                stages.push(Box::new(SurfaceExchange { coupling }));
+                stages.extend(grid_turbulence);
+                stages.push(Box::new(GridStep));
+                stages.push(Box::new(SurfacePressure));
+                stages.extend(sph_turbulence);
+                stages.push(Box::new(SphStep));
+                stages.push(Box::new(SphNeighbours));
+            }
+            None => {
+                if sim.sph.is_some() {
+                    stages.extend(sph_turbulence);
+                    stages.push(Box::new(SphStep));
+                    stages.push(Box::new(SphNeighbours));
+                }
+                if sim.grid.is_some() {
+                    stages.extend(grid_turbulence);
+                    stages.push(Box::new(GridStep));
+                }
+            }
         }
         if sim.sph.is_some() && !scene.output.metrics.is_empty() {
             stages.push(Box::new(SphMetrics {
@@ -304,6 +323,7 @@ impl Pipeline {
             stages,
             frames,
             profiles,
+            stage_seconds: Vec::new(),
         })
     }
 
@@ -324,8 +344,11 @@ impl Pipeline {
             dt,
             ..Default::default()
         };
-        for stage in &mut self.stages {
+        self.stage_seconds.resize(self.stages.len(), 0.0);
+        for (stage, seconds) in self.stages.iter_mut().zip(&mut self.stage_seconds) {
+            let started = Instant::now();
             stage.run(sim, &mut rec)?;
+            *seconds += started.elapsed().as_secs_f64();
             if let Some(trace) = trace.as_deref_mut() {
                 trace.push(stage.name().to_owned());
                 let parts = stage.ran(sim).iter();

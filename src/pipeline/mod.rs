@@ -8,6 +8,7 @@
 //! shortens it to land on the end time, and runs the stages with it.
 
 mod build;
+mod coupling;
 mod driver;
 mod footprint;
 mod frames;
@@ -19,6 +20,7 @@ mod turbulence;
 use std::path::{Path, PathBuf};
 
 pub use build::{grid_solver, sph_solver, Frames, Pipeline};
+pub use coupling::{Exchange, DRAG_HEIGHT};
 pub use driver::run_scene;
 pub use footprint::{available_memory, Footprint};
 pub use frames::{GridFrames, Kind, ParticleFrames};

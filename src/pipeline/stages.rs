@@ -23,6 +23,8 @@ pub struct StepRecord {
     pub sph: Option<StepStats>,
     pub grid: Option<GridStepStats>,
     pub turbulence: Option<TurbulenceStats>,
+    /// What the water received across its surface, in a coupled scene.
+    pub exchange: Option<super::coupling::Exchange>,
 }
 
 /// One stage of a step.

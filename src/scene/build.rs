@@ -71,7 +71,10 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
         reflection: grid.reflection,
         viscosity_scheme: grid.viscosity_scheme,
         viscosity: scene.viscosity.kinematic,
-        density: grid.density,
+        density: scene
+            .coupling
+            .as_ref()
+            .map_or(grid.density, |c| c.air_density),
         confinement: grid.vorticity_confinement,
         gravity: Vec3::from(scene.gravity),
         gravity_force: grid.gravity,
@@ -82,6 +85,7 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
         },
         smoke: grid.smoke.clone(),
         average_from: grid.average_from,
+        container: scene.coupling.is_some() && scene.container.is_some(),
     })
 }
 

@@ -102,7 +102,7 @@ impl InitialFlow {
     }
 }
 
-fn default_grid_density() -> Real {
+pub(super) fn default_grid_density() -> Real {
     1.0
 }
 fn default_pressure_tolerance() -> Real {

@@ -2,6 +2,7 @@
 //! parts built from a resolved scene.
 
 pub mod build;
+pub mod coupling;
 pub mod error;
 pub mod grid;
 pub mod load;
@@ -12,6 +13,7 @@ pub mod turbulence;
 pub mod validate;
 
 pub use crate::refine::Refinement;
+pub use coupling::Coupling;
 pub use error::{Number, SceneError};
 pub use grid::{
     Advection, Grid, GridBoundary, GridSide, InitialFlow, Smoke, SmokeSource, ViscosityScheme,

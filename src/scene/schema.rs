@@ -52,6 +52,10 @@ pub struct Scene {
     /// defaults of Pfaff et al. 2009 when left out.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub turbulence: Option<crate::abl::TurbulenceParams>,
+    /// The exchange across the water surface when the scene has both a grid (the air) and a
+    /// fluid (the water); without it the two only share the clock.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupling: Option<super::Coupling>,
     /// The SPH turbulence refinement (`none` when left out).
     #[serde(default)]
     pub refinement: crate::refine::Refinement,

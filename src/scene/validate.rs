@@ -91,6 +91,7 @@ impl Scene {
         self.validate_solvers(&c)?;
         self.validate_grid(&c)?;
         self.validate_turbulence(&c)?;
+        self.validate_coupling(&c)?;
         self.refinement
             .validate()
             .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;
@@ -454,6 +455,9 @@ impl Interval {
     }
     pub(super) fn closed(lo: Real, hi: Real) -> Self {
         Self::new(Bound::Closed(lo), Bound::Closed(hi))
+    }
+    pub(super) fn open(lo: Real, hi: Real) -> Self {
+        Self::new(Bound::Open(lo), Bound::Open(hi))
     }
     /// Says where a bound comes from, e.g. "`domain.min[0]`".
     pub(super) fn note(mut self, note: &str) -> Self {

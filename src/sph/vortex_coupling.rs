@@ -2,6 +2,7 @@
 //! particles near a point) and sink (the fluid particles' velocities, vorticity by the shared
 //! difference curl). Both read the neighbour grid of the last neighbourhood update.
 
+use super::boundary::BoundaryParticles;
 use super::fluid::FluidParticles;
 use super::kernel::CubicSpline;
 use super::neighbors::CellGrid;
@@ -19,6 +20,7 @@ pub struct SphVelocity<'a> {
     kernel: &'a CubicSpline,
     fluid: &'a FluidParticles,
     grid: &'a CellGrid,
+    boundary: &'a BoundaryParticles,
 }
 
 impl SphSolver {
@@ -28,11 +30,50 @@ impl SphSolver {
             kernel: &self.kernel,
             fluid: &self.fluid,
             grid: self.grid(),
+            boundary: &self.boundary,
         }
     }
 }
 
 impl SphVelocity<'_> {
+    /// Calls `f(j, V_j W(x - x_j))` for every fluid particle j within the kernel support of
+    /// `x`: the weights of kernel interpolation at a point.
+    pub fn for_each_weight(&self, x: &Vec3, mut f: impl FnMut(usize, Real)) {
+        let fluid = self.fluid;
+        self.grid
+            .for_each_near(x, &fluid.x, self.kernel.support(), |j| {
+                f(
+                    j,
+                    fluid.mass / fluid.density[j] * self.kernel.w((x - fluid.x[j]).norm()),
+                )
+            });
+    }
+
+    /// The occupancy of `x` by the liquid, sum_j V_j W(x - x_j) / (1 - sum_b V_b W(x - x_b)):
+    /// 1 inside the liquid, about 1/2 on its free surface, 0 away from it; the walls' share of
+    /// the kernel (which a full neighbourhood of liquid would have filled) is divided out, so a
+    /// point in the liquid beside a wall is 1 too. With it the Shepard-normalised velocity (0
+    /// where the occupancy is).
+    pub fn occupancy(&self, x: &Vec3) -> (Real, Vec3) {
+        let (mut sum, mut v) = (0.0, Vec3::zeros());
+        let fluid = self.fluid;
+        self.for_each_weight(x, |j, w| {
+            sum += w;
+            v += w * fluid.v[j];
+        });
+        if sum <= 0.0 {
+            return (0.0, v);
+        }
+        let b = self.boundary;
+        let mut wall = 0.0;
+        b.grid.for_each_near(x, &b.x, self.kernel.support(), |i| {
+            wall += b.volume[i] * self.kernel.w((x - b.x[i]).norm())
+        });
+        let open = 1.0 - wall;
+        let occupancy = if open > 1e-3 { sum / open } else { 0.0 };
+        (occupancy, v / sum)
+    }
+
     /// Calls `f(V_j, v_j, x - x_j)` for every fluid particle j within the kernel support of `x`.
     fn near_point(&self, x: &Vec3, mut f: impl FnMut(Real, Vec3, Vec3)) {
         let fluid = self.fluid;

@@ -79,6 +79,13 @@ pub struct Motion {
     pub keyframes: Vec<Keyframe>,
 }
 
+impl Motion {
+    /// At rest: no velocity and no keyframes.
+    pub fn is_still(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 /// A pose at a time.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::poisson::SolverSettings;
-use crate::geometry::Shape;
+use crate::geometry::{Motion, Shape};
 use crate::stepping::StepLimits;
 use crate::{Real, Vec3};
 
@@ -282,6 +282,10 @@ pub struct SmokeSource {
     /// Velocity set on the faces inside, m/s; left alone when not given.
     #[serde(default)]
     pub velocity: Option<[Real; 3]>,
+    /// Its motion, as an obstacle's (give a source on a moving body the body's motion); at rest
+    /// when left out.
+    #[serde(default, skip_serializing_if = "Motion::is_still")]
+    pub motion: Motion,
 }
 
 fn default_source_density() -> Real {

@@ -16,7 +16,7 @@ use super::params::{Advection, GridParams, Smoke, SmokeSource};
 use super::poisson::{CellKind, PoissonSystem, SolveError};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
-use crate::geometry::{Body, Motion};
+use crate::geometry::Body;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::parallel::BLOCK;
 use crate::stepping::towards_end;
@@ -92,6 +92,8 @@ struct SourceRegion {
     faces: Option<([Array3<bool>; 3], Vec3)>,
     density: Real,
     temperature: Real,
+    /// The source's shape and motion, when it moves: its cells and faces follow it.
+    moving: Option<RigidBody>,
 }
 
 /// The MAC-grid fluid of a scene.
@@ -260,7 +262,7 @@ impl GridSolver {
             // this step, has carried the smoke; the velocity itself is not advanced.
             if let Some(smoke) = self.smoke.as_mut() {
                 self.ran.push("forces");
-                apply_sources(smoke, &mut self.mac, &self.bounds);
+                apply_sources(smoke, &mut self.mac, &self.bounds, self.time);
             }
             self.mac.u.clone_from(frozen);
             self.ran.push("static flow");
@@ -566,7 +568,7 @@ impl GridSolver {
         }
         self.apply_impulses();
         if let Some(smoke) = self.smoke.as_mut() {
-            apply_sources(smoke, &mut self.mac, &self.bounds);
+            apply_sources(smoke, &mut self.mac, &self.bounds, self.time);
             if smoke.buoyancy != 0.0 || smoke.heat_buoyancy != 0.0 {
                 let lift = buoyancy(
                     &smoke.density,
@@ -750,31 +752,57 @@ fn source_region(
             shape: source.shape.clone(),
             position: source.position,
             rotation: source.rotation,
-            motion: Motion::default(),
+            motion: source.motion.clone(),
             abl: None,
         },
         index,
     )?;
-    let inside = |x: Vec3| body.signed_distance(0.0, &Point3::from(x)) <= 0.0;
-    let cells = Array3::from_shape_fn(mac.dims, |(i, j, k)| inside(mac.cell_center([i, j, k])));
-    let faces = source.velocity.map(|v| {
-        let masks = std::array::from_fn(|a| {
-            Array3::from_shape_fn(mac.u[a].raw_dim(), |(i, j, k)| {
-                inside(mac.face_center(a, [i, j, k]))
-            })
-        });
-        (masks, Vec3::from(v))
-    });
+    let (cells, faces) = source_cells(mac, &body, source.velocity.is_some(), 0.0);
     Ok(SourceRegion {
         cells,
-        faces,
+        faces: faces.map(|f| (f, Vec3::from(source.velocity.unwrap_or_default()))),
         density: source.density,
         temperature: source.temperature,
+        moving: body.is_moving().then_some(body),
     })
 }
 
+/// The cells (and with `faces` the faces of each component) whose centres lie in `body` at `t`.
+#[allow(clippy::type_complexity)]
+fn source_cells(
+    mac: &MacGrid,
+    body: &RigidBody,
+    faces: bool,
+    t: Real,
+) -> (Array3<bool>, Option<[Array3<bool>; 3]>) {
+    let pose = body.pose(t);
+    let inside = |x: Vec3| {
+        body.signed_distance_local(&pose.inverse_transform_point(&Point3::from(x))) <= 0.0
+    };
+    let mut cells = Array3::from_elem(mac.dims, false);
+    Zip::indexed(&mut cells).par_for_each(|(i, j, k), c| *c = inside(mac.cell_center([i, j, k])));
+    let faces = faces.then(|| {
+        std::array::from_fn(|a| {
+            let mut f = Array3::from_elem(mac.u[a].raw_dim(), false);
+            Zip::indexed(&mut f)
+                .par_for_each(|(i, j, k), f| *f = inside(mac.face_center(a, [i, j, k])));
+            f
+        })
+    });
+    (cells, faces)
+}
+
 /// The smoke sources' density, temperature and face velocities, and no smoke inside obstacles.
-fn apply_sources(smoke: &mut SmokeState, mac: &mut MacGrid, bounds: &Boundaries) {
+fn apply_sources(smoke: &mut SmokeState, mac: &mut MacGrid, bounds: &Boundaries, t: Real) {
+    for src in &mut smoke.sources {
+        if let Some(body) = &src.moving {
+            let (cells, faces) = source_cells(mac, body, src.faces.is_some(), t);
+            src.cells = cells;
+            if let (Some((old, _)), Some(new)) = (src.faces.as_mut(), faces) {
+                *old = new;
+            }
+        }
+    }
     for src in &smoke.sources {
         set_where(&mut smoke.density, &src.cells, src.density);
         if let Some(t) = smoke.temperature.as_mut() {

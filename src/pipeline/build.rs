@@ -287,6 +287,7 @@ impl Pipeline {
                 file: Kind::Grid.file("metrics.csv", both),
                 csv: None,
                 taylor_green,
+                coupled: scene.coupling.is_some() && has_sph,
             }));
         }
         let profiles = probes

@@ -266,7 +266,22 @@ pub struct GridMetrics {
     pub file: String,
     pub csv: Option<CsvSeries>,
     pub taylor_green: Option<TaylorGreenDecay>,
+    /// A coupled scene's: the forces the water felt across its surface.
+    pub coupled: bool,
 }
+
+/// Columns of a coupled scene's grid metrics: the forces on the water (the air's are opposite),
+/// N, the cells under the liquid and the area the drag acted on, m^2.
+const COUPLING_METRICS: [&str; 8] = [
+    "drag_force_x",
+    "drag_force_y",
+    "drag_force_z",
+    "pressure_force_x",
+    "pressure_force_y",
+    "pressure_force_z",
+    "liquid_cells",
+    "surface_area",
+];
 
 /// The Taylor–Green vortex's energy decays as E(t) = E(0) exp(-4 nu t); the column
 /// `taylor_green_error` is |ln(E / E(t))| after each step, with E(0) the grid's own energy of
@@ -285,12 +300,17 @@ impl Stage for GridMetrics {
         (
             format!(
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
-                 change rate, stage times{}{}",
+                 change rate, stage times{}{}{}",
                 self.file,
                 grid_turbulence(sim)
                     .map_or(String::new(), |t| format!("; {}", t.describe_columns())),
                 if self.taylor_green.is_some() {
                     "; Taylor-Green energy decay error |ln(E / E(0) exp(-4 nu t))|"
+                } else {
+                    ""
+                },
+                if self.coupled {
+                    "; the air's drag and pressure force on the water, liquid cells, surface area"
                 } else {
                     ""
                 }
@@ -304,6 +324,9 @@ impl Stage for GridMetrics {
         columns.extend(GRID_METRICS.map(String::from));
         if let Some(t) = grid_turbulence(sim) {
             columns.extend(t.columns());
+        }
+        if self.coupled {
+            columns.extend(COUPLING_METRICS.map(String::from));
         }
         if let (Some(tg), Some(grid)) = (self.taylor_green.as_mut(), sim.grid.as_ref()) {
             tg.initial_energy = grid.kinetic_energy();
@@ -335,6 +358,12 @@ impl Stage for GridMetrics {
         ];
         if let (Some(_), Some(t)) = (grid_turbulence(sim), rec.turbulence) {
             row.extend(t.row());
+        }
+        if self.coupled {
+            let e = rec.exchange.unwrap_or_default();
+            let (drag, pressure) = (e.drag / rec.dt, e.pressure / rec.dt);
+            row.extend(drag.iter().chain(pressure.iter()));
+            row.extend([e.liquid_cells as Real, e.area]);
         }
         if let Some(tg) = &self.taylor_green {
             let exact = tg.initial_energy * (-4.0 * tg.nu * sim.grid().time()).exp();

@@ -322,6 +322,7 @@ impl Scene {
                 if let Some(v) = source.velocity {
                     c.vec3(&format!("{key}.velocity"), v)?;
                 }
+                c.motion(&format!("{key}.motion"), &source.motion)?;
             }
         }
         if self.refinement != super::Refinement::None && self.fluid.is_none() {

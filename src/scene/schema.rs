@@ -23,7 +23,9 @@ pub struct Scene {
     /// Seed of every random generator in the run, so runs reproduce exactly.
     #[serde(default)]
     pub seed: u64,
-    /// The simulation domain; a particle that leaves it stops the run as unstable.
+    /// The simulation domain; a particle that leaves it (by more than 0.6 particle spacings,
+    /// the depth of the wall samples behind a container flush with it) stops the run as
+    /// unstable.
     pub domain: Domain,
     /// Gravitational acceleration in m/s^2.
     #[serde(default = "default_gravity")]

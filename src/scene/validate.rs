@@ -390,7 +390,7 @@ impl Checker<'_> {
         Ok(())
     }
 
-    fn motion(&self, key: &str, motion: &Motion) -> Result<(), SceneError> {
+    pub(super) fn motion(&self, key: &str, motion: &Motion) -> Result<(), SceneError> {
         self.vec3(&format!("{key}.linear"), motion.linear)?;
         self.vec3(&format!("{key}.angular"), motion.angular)?;
         if motion.keyframes.len() == 1 {

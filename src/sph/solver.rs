@@ -577,9 +577,13 @@ impl SphSolver {
         )
     }
 
-    /// Stops the run on a non-finite state or a particle outside the domain.
+    /// Stops the run on a non-finite state or a particle outside the domain by more than the
+    /// wall layer's depth (a container flush with the domain lets particles touch its walls,
+    /// and a particle behind the wall samples has escaped).
     fn check(&self) -> Result<(), Instability> {
+        let margin = super::boundary::MIRROR_DEPTH * self.spacing;
         let (lo, hi) = self.params.domain;
+        let (lo, hi) = (lo.add_scalar(-margin), hi.add_scalar(margin));
         let bad = self
             .fluid
             .x

@@ -209,7 +209,7 @@ fn an_abl_blob_moves_with_the_stream() {
         let grid = p.sim.grid.as_ref().expect("the scene has a grid");
         let w = &mut p
             .sim
-            .turbulence
+            .grid_turbulence
             .as_mut()
             .expect("the scene has turbulence stages")
             .abl
@@ -387,7 +387,7 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
     }
     let plain = built(&text(CENTRE, "", ""));
     assert!(plain.stages.iter().all(|s| s.name() != "turbulence"));
-    assert!(plain.sim.turbulence.is_none());
+    assert!(plain.sim.grid_turbulence.is_none());
 }
 
 /// A 16^3 box whose lid drags the fluid (viscosity 0.01 m^2/s): twenty steps of it give a

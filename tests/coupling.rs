@@ -1,6 +1,8 @@
 //! Coupled grid + SPH scenes (`[coupling]`): the water is a moving solid to the air, the air
 //! drags the water, and every exchange moves momentum between them without making any.
 
+mod common;
+
 use std::path::Path;
 
 use eddy::pipeline::{Pipeline, DRAG_HEIGHT};
@@ -271,4 +273,75 @@ fn coupling_without_both_media_or_out_of_range_is_refused() {
     );
     let ok = scene(FLOATING_BLOCK, &["grid.density=1.2"]);
     assert!(ok.is_ok(), "{:?}", ok.err());
+}
+
+/// A ball with a boundary-layer database pulled through the water surface, half in each medium,
+/// seeds vortex particles on both sides (at a c_p far above the paper's, so a short run seeds
+/// many): the grid's set stays in the air above the surface and the fluid's in the water
+/// below it.
+#[test]
+fn a_ball_through_the_surface_seeds_both_media() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = common::ball_database(dir.path(), 0.06);
+    let text = format!(
+        r#"
+name = "ball_through_surface"
+seed = 2
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.8, 0.4, 0.4]
+[time]
+steps = 40
+cfl = 0.4
+[fluid]
+spacing = 0.02
+blocks = [{{ min = [0.0, 0.0, 0.0], max = [0.8, 0.2, 0.4] }}]
+[container]
+shape = {{ type = "box", half_extents = [0.4, 0.2, 0.2] }}
+position = [0.4, 0.2, 0.2]
+[grid]
+resolution = [32, 16, 16]
+[coupling]
+[turbulence]
+c_p = 1e3
+r_max = 4.0
+dissipation_radius = 1.0
+[output]
+vtk = false
+metrics = []
+[[obstacles]]
+name = "ball"
+shape = {{ type = "sphere", radius = 0.06 }}
+position = [0.15, 0.2, 0.2]
+motion = {{ linear = [1.0, 0.0, 0.0] }}
+{}
+"#,
+        common::abl_line(&db)
+    );
+    let mut p = common::built(&text, "ball_through_surface.toml");
+    let plan = eddy::pipeline::Plan::of(&p).step_trace();
+    let turbulence = plan.iter().filter(|s| *s == "turbulence").count();
+    assert_eq!(turbulence, 2, "one turbulence stage per medium: {plan:?}");
+    for _ in 0..40 {
+        p.step(None, None).unwrap();
+    }
+    let air = &p.sim.grid_turbulence.as_ref().unwrap().vortices;
+    let water = &p.sim.sph_turbulence.as_ref().unwrap().vortices;
+    assert!(
+        !air.is_empty() && !water.is_empty(),
+        "{} in the air, {} in the water",
+        air.len(),
+        water.len()
+    );
+    let surface = 0.2;
+    let above = air.x.iter().filter(|x| x.y > surface - 0.025).count();
+    assert!(
+        above * 10 >= air.len() * 9,
+        "{above} of the air's {} above the surface",
+        air.len()
+    );
+    assert!(
+        water.x.iter().all(|x| x.y < surface + 0.02),
+        "a water vortex above the surface"
+    );
 }

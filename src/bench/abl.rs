@@ -192,7 +192,11 @@ fn measure(
             cells: grid.resolution.iter().product(),
             steps,
             seconds,
-            particles: p.sim.turbulence.as_ref().map_or(0, |t| t.vortices.len()),
+            particles: p
+                .sim
+                .grid_turbulence
+                .as_ref()
+                .map_or(0, |t| t.vortices.len()),
             mean_k,
             u_error: Real::NAN,
             k_error: Real::NAN,

@@ -59,6 +59,11 @@ impl GridSolver {
         self.bounds.apply(&mut self.mac);
     }
 
+    /// Whether a coupled liquid is this grid's moving solid.
+    pub fn has_liquid(&self) -> bool {
+        self.liquid.is_some()
+    }
+
     /// Adds `du` (m/s) to face `idx` of component `a` in the next step, after its advection and
     /// before its projection, as a force would: the reaction of the water's drag on the air.
     /// A face index along a periodic axis is below the cell count.

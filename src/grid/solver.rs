@@ -298,6 +298,11 @@ impl GridSolver {
         Ok(stats)
     }
 
+    /// Whether the first body is a container holding the fluid (see [`GridParams::container`]).
+    pub fn has_container(&self) -> bool {
+        self.params.container
+    }
+
     /// Voxelises the obstacles at `t` and the coupled liquid, and rebuilds the pressure system
     /// when the solid cells changed.
     pub(super) fn rebuild_boundaries(&mut self, t: Real) {

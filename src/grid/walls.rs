@@ -46,13 +46,14 @@ pub fn boundary_cells(solver: &GridSolver, body: usize) -> Vec<[usize; 3]> {
 }
 
 /// Distance from every cell centre to the nearest wall, m: the obstacles' surfaces (0 inside
-/// them) and the domain sides that are walls (no-slip, moving or free-slip; inflow, open and
-/// periodic sides are not walls).
+/// them; a container's from inside), and the domain sides that are walls (no-slip, moving or
+/// free-slip; inflow, open and periodic sides are not walls).
 pub fn wall_distance(solver: &GridSolver) -> Array3<Real> {
     let mac = &solver.mac;
     let sides = &solver.bounds.sides;
     let t = solver.time();
     let poses: Vec<_> = solver.bodies.iter().map(|b| b.pose(t)).collect();
+    let container = solver.has_container();
     let mut out = Array3::zeros(mac.dims);
     Zip::indexed(&mut out).par_for_each(|(i, j, k), d| {
         let x = mac.cell_center([i, j, k]);
@@ -68,9 +69,10 @@ pub fn wall_distance(solver: &GridSolver) -> Array3<Real> {
                 }
             }
         }
-        for (body, pose) in solver.bodies.iter().zip(&poses) {
+        for (i, (body, pose)) in solver.bodies.iter().zip(&poses).enumerate() {
             let local = pose.inverse_transform_point(&Point3::from(x));
-            best = best.min(body.signed_distance_local(&local));
+            let d = body.signed_distance_local(&local);
+            best = best.min(if i == 0 && container { -d } else { d });
         }
         *d = best.max(0.0);
     });

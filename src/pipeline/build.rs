@@ -48,7 +48,19 @@ pub struct Frames {
     both: bool,
     pub particles: Option<ParticleFrames>,
     pub grid: Option<GridFrames>,
-    pub vortices: Option<VortexFrames>,
+    /// The grid's and the fluid's vortex particles.
+    pub vortices: [Option<VortexFrames>; 2],
+}
+
+/// The file names of the grid's and the fluid's vortex particles, where they have them:
+/// `vortices`, or `grid_vortices` and `particles_vortices` when both do.
+fn vortex_sets(sim: &Simulation) -> [Option<String>; 2] {
+    let both = sim.grid_turbulence.is_some() && sim.sph_turbulence.is_some();
+    [
+        (&sim.grid_turbulence, Kind::Grid),
+        (&sim.sph_turbulence, Kind::Particles),
+    ]
+    .map(|(t, kind)| t.as_ref().map(|_| kind.file("vortices", both)))
 }
 
 impl Frames {
@@ -58,10 +70,13 @@ impl Frames {
             w.write(sph)?;
         }
         if let (Some(w), Some(grid)) = (self.grid.as_mut(), sim.grid.as_ref()) {
-            w.write(grid, sim.turbulence.as_ref())?;
+            w.write(grid, sim.grid_turbulence.as_ref())?;
         }
-        if let (Some(w), Some(t)) = (self.vortices.as_mut(), sim.turbulence.as_ref()) {
-            w.write(&t.vortices, sim.steps, sim.time)?;
+        let sets = [&sim.grid_turbulence, &sim.sph_turbulence];
+        for (w, t) in self.vortices.iter_mut().zip(sets) {
+            if let (Some(w), Some(t)) = (w, t) {
+                w.write(&t.vortices, sim.steps, sim.time)?;
+            }
         }
         Ok(())
     }
@@ -80,14 +95,16 @@ impl Frames {
             (sim.sph.is_some(), Kind::Particles, "particles"),
             (sim.grid.is_some(), Kind::Grid, "grid"),
         ];
-        if sim.turbulence.is_some() && self.vtk {
-            out.push((
-                "vtk",
-                format!("vortex particles + vortices.pvd every {} s", self.interval),
-            ));
-        }
-        if sim.turbulence.is_some() && self.hdf5 {
-            out.push(("hdf5", format!("vortices.h5 every {} s", self.interval)));
+        for name in vortex_sets(sim).into_iter().flatten() {
+            if self.vtk {
+                out.push((
+                    "vtk",
+                    format!("vortex particles + {name}.pvd every {} s", self.interval),
+                ));
+            }
+            if self.hdf5 {
+                out.push(("hdf5", format!("{name}.h5 every {} s", self.interval)));
+            }
         }
         for (_, kind, name) in kinds.iter().filter(|k| k.0) {
             if self.vtk {
@@ -192,28 +209,32 @@ impl Pipeline {
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let mut sim = Simulation::new(sph, grid);
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
-        // The grid's turbulence in a scene with a grid, else the fluid's (a coupled scene's
-        // obstacles drive the grid).
-        let turbulence: Option<Box<dyn Stage>> = match build::abl_settings(scene) {
-            Some(settings) => {
-                let shapes: Vec<_> = scene
-                    .container
-                    .iter()
-                    .chain(&scene.obstacles)
-                    .map(|b| b.shape.clone())
-                    .collect();
-                Some(match scene.grid.as_ref() {
-                    Some(grid) => Box::new(GridTurbulence::build(
-                        settings,
-                        &mut sim,
-                        &shapes,
-                        grid.advection,
-                    )?),
-                    None => Box::new(SphTurbulence::build(settings, &mut sim, &shapes)?),
-                })
+        // The grid's turbulence in a scene with a grid, the fluid's in a scene with a fluid;
+        // a coupled scene has both, each seeded and synthesised in its own medium (an
+        // uncoupled scene with both drives the grid).
+        let coupled = scene.coupling.is_some() && has_sph && has_grid;
+        let (mut grid_turbulence, mut sph_turbulence): (Option<Box<dyn Stage>>, _) = (None, None);
+        if let Some(settings) = build::abl_settings(scene) {
+            let shapes: Vec<_> = scene
+                .container
+                .iter()
+                .chain(&scene.obstacles)
+                .map(|b| b.shape.clone())
+                .collect();
+            if let Some(grid) = scene.grid.as_ref() {
+                grid_turbulence = Some(Box::new(GridTurbulence::build(
+                    settings.clone(),
+                    &mut sim,
+                    &shapes,
+                    grid.advection,
+                )?));
             }
-            None => None,
-        };
+            if has_sph && (coupled || !has_grid) {
+                let stage: Box<dyn Stage> =
+                    Box::new(SphTurbulence::build(settings, &mut sim, &shapes)?);
+                sph_turbulence = Some(stage);
+            }
+        }
         let probes = &scene.probes;
         let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
         if sim.sph.is_some() && !probes.is_empty() {
@@ -238,11 +259,7 @@ impl Pipeline {
                 recorder: None,
             }));
         }
-        let (grid_turbulence, sph_turbulence) = match turbulence {
-            Some(t) if sim.grid.is_some() => (Some(t), None),
-            t => (None, t),
-        };
-        match scene.coupling.clone().filter(|_| has_sph && has_grid) {
+        match scene.coupling.clone().filter(|_| coupled) {
             // The water is the air's boundary for the step, the air's pressure on it is known
             // after the grid's projection, and both reach the particles before they move.
             Some(coupling) => {
@@ -316,7 +333,7 @@ impl Pipeline {
             both,
             particles: None,
             grid: None,
-            vortices: None,
+            vortices: [None, None],
         };
         Ok(Self {
             footprint,
@@ -382,8 +399,10 @@ impl Pipeline {
             let name = hdf5(Kind::Grid);
             f.grid = Some(GridFrames::new(out, f.vtk, name.as_deref(), &f.attrs)?);
         }
-        if self.sim.turbulence.is_some() {
-            f.vortices = Some(VortexFrames::new(out, f.vtk, f.hdf5, &f.attrs)?);
+        for (w, name) in f.vortices.iter_mut().zip(vortex_sets(&self.sim)) {
+            if let Some(name) = name {
+                *w = Some(VortexFrames::new(out, &name, f.vtk, f.hdf5, &f.attrs)?);
+            }
         }
         Ok(())
     }

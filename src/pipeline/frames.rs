@@ -248,27 +248,32 @@ impl GridFrames {
     }
 }
 
-/// The vortex-particle writers of a grid scene with boundary layers: `vortices.pvd` with
-/// `vortices_NNNNNN.vtp`, and `vortices.h5`.
-pub struct VortexFrames(Writers<Hdf5Frames>);
+/// The vortex-particle writers of a scene with boundary layers: `NAME.pvd` with
+/// `NAME_NNNNNN.vtp`, and `NAME.h5`, NAME `vortices` (`grid_vortices` and
+/// `particles_vortices` in a coupled scene, which has a set in each medium).
+pub struct VortexFrames(Writers<Hdf5Frames>, String);
 
 impl VortexFrames {
-    /// Writers into `out`, with `vortices.h5` when `hdf5`.
+    /// Writers into `out` named `name`, with `NAME.h5` when `hdf5`.
     pub fn new(
         out: &Path,
+        name: &str,
         vtk: bool,
         hdf5: bool,
         attrs: &[(&str, AttrValue)],
     ) -> Result<Self, IoError> {
         let hdf5 = hdf5
-            .then(|| Hdf5Frames::create(&out.join("vortices.h5"), attrs))
+            .then(|| Hdf5Frames::create(&out.join(format!("{name}.h5")), attrs))
             .transpose()?;
-        Ok(Self(Writers {
-            out: out.to_path_buf(),
-            pvd: vtk.then(|| PvdSeries::new(&out.join("vortices.pvd"))),
-            hdf5,
-            count: 0,
-        }))
+        Ok(Self(
+            Writers {
+                out: out.to_path_buf(),
+                pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{name}.pvd")))),
+                hdf5,
+                count: 0,
+            },
+            name.to_owned(),
+        ))
     }
 
     /// Position, vorticity vector (1/s), radius `sqrt(6) sigma` (m), kernel energy (m^5/s^2)
@@ -294,7 +299,7 @@ impl VortexFrames {
         w.push(
             &frame,
             time,
-            ("vortices", "vtp"),
+            (&self.1, "vtp"),
             write_particles_vtk,
             |h5, f| h5.append(f),
         )
@@ -325,6 +330,8 @@ pub fn is_run_output(name: &str) -> bool {
         .or_else(|| name.strip_prefix("grid_"))
         .unwrap_or(name);
     FIXED.contains(&name)
+        || FIXED[4..].contains(&unprefixed)
+        || numbered(unprefixed, "vortices_", ".vtp")
         || ["metrics.csv", "probes.csv", "frames.h5"].contains(&unprefixed)
         || numbered(name, "particles_", ".vtp")
         || numbered(name, "grid_", ".vti")

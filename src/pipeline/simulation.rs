@@ -28,7 +28,10 @@ pub struct Simulation {
     /// The MAC-grid fluid, when the scene has a `[grid]`.
     pub grid: Option<GridSolver>,
     /// The grid's boundary-layer field and vortex particles, when an obstacle has a database.
-    pub turbulence: Option<Turbulence>,
+    pub grid_turbulence: Option<Turbulence>,
+    /// The SPH fluid's vortex particles (its boundary-layer field rides on the particles),
+    /// when an obstacle has a database; a coupled scene has both sets, each in its medium.
+    pub sph_turbulence: Option<Turbulence>,
     pub(super) time: Real,
     pub(super) steps: u64,
 }
@@ -39,7 +42,8 @@ impl Simulation {
         Self {
             sph,
             grid,
-            turbulence: None,
+            grid_turbulence: None,
+            sph_turbulence: None,
             time: 0.0,
             steps: 0,
         }

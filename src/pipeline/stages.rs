@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::simulation::{Simulation, StepError};
-use super::turbulence::{Turbulence, TurbulenceStats};
+use super::turbulence::TurbulenceStats;
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
@@ -22,7 +22,8 @@ pub struct StepRecord {
     pub dt: Real,
     pub sph: Option<StepStats>,
     pub grid: Option<GridStepStats>,
-    pub turbulence: Option<TurbulenceStats>,
+    pub grid_turbulence: Option<TurbulenceStats>,
+    pub sph_turbulence: Option<TurbulenceStats>,
     /// What the water received across its surface, in a coupled scene.
     pub exchange: Option<super::coupling::Exchange>,
 }
@@ -184,16 +185,6 @@ fn probe_line(file: &str, probes: &[Probe]) -> String {
     format!("{file}: {}", names.join(", "))
 }
 
-/// The turbulence state when it is the SPH fluid's (its columns go into the SPH metrics).
-fn particle_turbulence(sim: &Simulation) -> Option<&Turbulence> {
-    sim.turbulence.as_ref().filter(|t| t.abl.is_none())
-}
-
-/// The grid's turbulence state (its columns go into the grid metrics).
-fn grid_turbulence(sim: &Simulation) -> Option<&Turbulence> {
-    sim.turbulence.as_ref().filter(|t| t.abl.is_some())
-}
-
 /// The SPH row of each step: the state the step started from and what the step did. It runs
 /// after the step and keeps the state it measures for the next row.
 pub struct SphMetrics {
@@ -215,7 +206,8 @@ impl Stage for SphMetrics {
                 "{}: {} (state at the start of each step){}",
                 self.file,
                 names.join(", "),
-                particle_turbulence(sim)
+                sim.sph_turbulence
+                    .as_ref()
                     .map_or(String::new(), |t| format!("; {}", t.describe_columns()))
             ),
             Vec::new(),
@@ -223,7 +215,10 @@ impl Stage for SphMetrics {
     }
 
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
-        let extra = particle_turbulence(sim).map_or(Vec::new(), |t| t.columns());
+        let extra = sim
+            .sph_turbulence
+            .as_ref()
+            .map_or(Vec::new(), |t| t.columns());
         let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics, &extra)?;
         let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
         let state = recorder.measure(sph, &self.gravity);
@@ -235,7 +230,7 @@ impl Stage for SphMetrics {
         let (Some((recorder, state)), Some(stats)) = (self.recorder.as_mut(), rec.sph) else {
             return Ok(());
         };
-        let extra = match (particle_turbulence(sim), rec.turbulence) {
+        let extra = match (&sim.sph_turbulence, rec.sph_turbulence) {
             (Some(_), Some(t)) => t.row(),
             _ => Vec::new(),
         };
@@ -302,7 +297,8 @@ impl Stage for GridMetrics {
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
                  change rate, stage times{}{}{}",
                 self.file,
-                grid_turbulence(sim)
+                sim.grid_turbulence
+                    .as_ref()
                     .map_or(String::new(), |t| format!("; {}", t.describe_columns())),
                 if self.taylor_green.is_some() {
                     "; Taylor-Green energy decay error |ln(E / E(0) exp(-4 nu t))|"
@@ -322,7 +318,7 @@ impl Stage for GridMetrics {
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
         columns.extend(GRID_METRICS.map(String::from));
-        if let Some(t) = grid_turbulence(sim) {
+        if let Some(t) = &sim.grid_turbulence {
             columns.extend(t.columns());
         }
         if self.coupled {
@@ -356,7 +352,7 @@ impl Stage for GridMetrics {
             s.project_seconds,
             s.total_seconds,
         ];
-        if let (Some(_), Some(t)) = (grid_turbulence(sim), rec.turbulence) {
+        if let (Some(_), Some(t)) = (&sim.grid_turbulence, rec.grid_turbulence) {
             row.extend(t.row());
         }
         if self.coupled {

@@ -48,8 +48,7 @@ impl Default for Coupling {
 
 impl Scene {
     /// A `[coupling]` needs a grid and a fluid, its values in range, one air density, and
-    /// what the exchange supports: one projection per step, a solved flow, no boundary-layer
-    /// database yet.
+    /// what the exchange supports: one projection per step, a solved flow.
     pub(super) fn validate_coupling(&self, c: &Checker) -> Result<(), SceneError> {
         let Some(coupling) = &self.coupling else {
             return Ok(());
@@ -100,19 +99,13 @@ impl Scene {
                 "grid.static_flow",
                 "a stored flow",
             ),
-            (
-                self.abl_obstacles().next().is_some(),
-                "obstacles[].abl",
-                "a boundary-layer database",
-            ),
         ];
         if let Some((_, key, value)) = unsupported.into_iter().find(|u| u.0) {
             return Err(c.invalid(
                 key,
                 value,
-                "not in a coupled scene yet: the exchange takes the pressure of one projection \
-                 per step from a solved flow, and boundary-layer turbulence on both sides of \
-                 the surface is not built",
+                "not in a coupled scene: the exchange takes the pressure of one projection per \
+                 step from a solved flow",
             ));
         }
         Ok(())

@@ -110,8 +110,9 @@ pub fn grid(p: &eddy::pipeline::Pipeline) -> &eddy::grid::GridSolver {
 #[allow(dead_code)]
 pub fn turbulence(p: &eddy::pipeline::Pipeline) -> &eddy::pipeline::Turbulence {
     p.sim
-        .turbulence
+        .grid_turbulence
         .as_ref()
+        .or(p.sim.sph_turbulence.as_ref())
         .expect("the scene has turbulence stages")
 }
 

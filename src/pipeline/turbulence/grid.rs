@@ -118,7 +118,7 @@ impl GridTurbulence {
         let grid = sim.grid.as_ref().expect("turbulence is built for a grid");
         let common = Common::build(settings, shapes, &grid.bodies, grid.mac.dx)?;
         let moving = grid.bodies.iter().any(|b| b.is_moving());
-        sim.turbulence = Some(Turbulence {
+        sim.grid_turbulence = Some(Turbulence {
             abl: Some(std::array::from_fn(|_| Array3::zeros(grid.mac.dims))),
             vortices: VortexParticles::new(),
             parts: &PARTS,
@@ -246,7 +246,7 @@ impl Stage for GridTurbulence {
     fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
         let grid = sim.grid.as_mut().expect("turbulence is built for a grid");
         let state = sim
-            .turbulence
+            .grid_turbulence
             .as_mut()
             .expect("built with the turbulence state");
         let abl = state.abl.as_mut().expect("a grid's omega_ABL is on cells");
@@ -286,6 +286,10 @@ impl Stage for GridTurbulence {
             &mut grid.mac,
             self.common.settings.params.upsample,
         )?;
+        if grid.has_liquid() {
+            // The faces under a coupled liquid carry its velocity, not the air's kernels.
+            grid.bounds.apply(&mut grid.mac);
+        }
         laps.lap(4);
         stats.seconds = laps.seconds;
         stats.particles = state.vortices.len();
@@ -295,7 +299,7 @@ impl Stage for GridTurbulence {
             .and(y)
             .and(z)
             .fold(0.0, |s, &a, &b, &c| s + (a * a + b * b + c * c).sqrt());
-        rec.turbulence = Some(stats);
+        rec.grid_turbulence = Some(stats);
         Ok(())
     }
 

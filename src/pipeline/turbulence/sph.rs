@@ -72,7 +72,7 @@ impl SphTurbulence {
         let sph = sim.sph.as_mut().expect("turbulence is built for a fluid");
         let common = Common::build(settings, shapes, &sph.bodies, sph.spacing)?;
         let field = sph.fluid.carry(ABL_FIELD);
-        sim.turbulence = Some(Turbulence {
+        sim.sph_turbulence = Some(Turbulence {
             abl: None,
             vortices: VortexParticles::new(),
             parts: &PARTS,
@@ -261,7 +261,7 @@ impl Stage for SphTurbulence {
     fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {
         let sph = sim.sph.as_mut().expect("turbulence is built for a fluid");
         let state = sim
-            .turbulence
+            .sph_turbulence
             .as_mut()
             .expect("built with the turbulence state");
         let dt = rec.dt;
@@ -291,7 +291,7 @@ impl Stage for SphTurbulence {
             .iter()
             .map(|w| w.norm())
             .sum();
-        rec.turbulence = Some(stats);
+        rec.sph_turbulence = Some(stats);
         Ok(())
     }
 

@@ -345,3 +345,39 @@ motion = {{ linear = [1.0, 0.0, 0.0] }}
         "a water vortex above the surface"
     );
 }
+
+/// A coupled run with HDF5 output writes one `frames.h5` that opens both series: `/particles`
+/// and `/grid` link to their indexes, and every frame of each is readable through it.
+#[test]
+fn one_frames_file_opens_both_media() {
+    let out = tempfile::tempdir().unwrap();
+    let file = out.path().join("wind.toml");
+    std::fs::write(&file, WIND_OVER_LAYER).unwrap();
+    let options = eddy::pipeline::RunOptions {
+        out: Some(out.path().join("run")),
+        overrides: vec![
+            "time.steps=3".into(),
+            "output.hdf5=true".into(),
+            "output.interval=0.001".into(),
+        ],
+        ..Default::default()
+    };
+    let summary = {
+        let _serial = common::hdf5_or_child();
+        eddy::pipeline::run(&file, &options).unwrap()
+    };
+    let _serial = common::hdf5_or_child();
+    let h5 = hdf5::File::open(out.path().join("run/frames.h5")).unwrap();
+    let scene: hdf5::types::VarLenUnicode = h5.attr("scene").unwrap().read_scalar().unwrap();
+    assert_eq!(scene.as_str(), "wind_over_layer");
+    for (kind, columns) in [("particles", "position"), ("grid", "velocity")] {
+        let frames = h5
+            .group(&format!("{kind}/frames"))
+            .unwrap()
+            .member_names()
+            .unwrap();
+        assert_eq!(frames.len(), summary.frames, "{kind}: {frames:?}");
+        let last = format!("{kind}/frames/{}/{columns}", frames.last().unwrap());
+        assert!(h5.dataset(&last).unwrap().size() > 0, "{last} is empty");
+    }
+}

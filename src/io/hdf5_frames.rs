@@ -206,6 +206,30 @@ impl FrameIndex {
     }
 }
 
+/// Writes `path` as an HDF5 file whose root holds `attributes` and, for each `(name, target)`,
+/// an external link `/name` to the root of the file `target` (relative to `path`'s folder):
+/// one file that opens several frame series together (a coupled scene's `frames.h5`, with
+/// `/particles` and `/grid`). Written whole under a temporary name and renamed.
+pub fn write_links(
+    path: &Path,
+    attributes: &[(&str, AttrValue)],
+    links: &[(&str, &str)],
+) -> Result<(), IoError> {
+    let attributes: Vec<(String, AttrValue)> = attributes
+        .iter()
+        .map(|(n, v)| (n.to_string(), v.clone()))
+        .collect();
+    replace_file(path, |file| {
+        write_root_attributes(file, &attributes)?;
+        for (name, target) in links {
+            ctx(file.link_external(target, "/", name), || {
+                format!("linking /{name} to {target}")
+            })?;
+        }
+        Ok(())
+    })
+}
+
 /// Builds an HDF5 file with `write` under a temporary sibling name and renames it onto `path`;
 /// on failure the temporary file is removed and `path` is left as it was.
 fn replace_file(

@@ -24,7 +24,7 @@ pub use csv::CsvSeries;
 pub use error::IoError;
 pub use frame::{Field, FieldData, ParticleFrame};
 pub use grid_frame::{GridField, GridFieldData, GridFrame};
-pub use hdf5_frames::{AttrValue, Hdf5Frames};
+pub use hdf5_frames::{write_links, AttrValue, Hdf5Frames};
 pub use hdf5_grid::{
     read_velocity, Hdf5GridFrames, StoredVelocity, GRID_FORMAT, GRID_FORMAT_VERSION,
 };

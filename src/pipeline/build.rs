@@ -17,7 +17,7 @@ use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::{GridError, GridSolver};
 use crate::io::read_velocity;
-use crate::io::{AttrValue, IoError};
+use crate::io::{write_links, AttrValue, IoError};
 use crate::metrics::Probe;
 use crate::refine;
 use crate::scene::{build, InitialFlow, Scene};
@@ -123,6 +123,12 @@ impl Frames {
                     ),
                 ));
             }
+        }
+        if self.hdf5 && self.both {
+            out.push((
+                "hdf5",
+                "frames.h5: /particles and /grid, links to both series, open together".into(),
+            ));
         }
         out
     }
@@ -398,6 +404,15 @@ impl Pipeline {
         if self.sim.grid.is_some() {
             let name = hdf5(Kind::Grid);
             f.grid = Some(GridFrames::new(out, f.vtk, name.as_deref(), &f.attrs)?);
+        }
+        if f.hdf5 && f.both {
+            // One file that opens both series: /particles and /grid link to their indexes.
+            let links = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.h5", true));
+            write_links(
+                &out.join("frames.h5"),
+                &f.attrs,
+                &[("particles", &links[0]), ("grid", &links[1])],
+            )?;
         }
         for (w, name) in f.vortices.iter_mut().zip(vortex_sets(&self.sim)) {
             if let Some(name) = name {

@@ -8,6 +8,7 @@ use ndarray::{Array3, Zip};
 use super::mac::{cells_beside_face, MacGrid};
 use super::params::GridSide;
 use super::solver::GridSolver;
+use crate::geometry::RigidBody;
 use crate::{Real, Vec3};
 
 /// The cells a liquid covers and its velocity on the faces touching them.
@@ -52,10 +53,14 @@ impl Liquid {
 
 impl GridSolver {
     /// Makes `liquid` the grid's moving solid from now on (until the next call): its cells leave
-    /// the pressure solve and its faces carry its velocity.
-    pub fn set_liquid(&mut self, liquid: Liquid) {
+    /// the pressure solve and its faces carry its velocity. With moving obstacles `dt` is the
+    /// coming step's: they are placed where that step's projection sees them, once.
+    pub fn set_liquid(&mut self, liquid: Liquid, dt: Real) {
         self.liquid = Some(liquid);
-        self.rebuild_boundaries(self.time());
+        let moving = self.bodies.iter().any(RigidBody::is_moving);
+        let t = self.time() + if moving { dt } else { 0.0 };
+        self.rebuild_boundaries(t);
+        self.bounds_time = Some(t);
         self.bounds.apply(&mut self.mac);
     }
 

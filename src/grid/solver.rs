@@ -123,6 +123,9 @@ pub struct GridSolver {
     frozen: Option<[Array3<Real>; 3]>,
     /// The coupled liquid, a moving solid to this grid (see [`Self::set_liquid`]).
     pub(super) liquid: Option<super::liquid::Liquid>,
+    /// The time the boundaries were last placed for by [`Self::set_liquid`], so the step
+    /// that follows does not place moving obstacles again.
+    pub(super) bounds_time: Option<Real>,
     /// Face velocity changes from outside, applied in the next step's forces.
     pub(super) impulses: Option<[Array3<Real>; 3]>,
     /// Against gravity (y without gravity): the direction smoke rises.
@@ -183,6 +186,7 @@ impl GridSolver {
             frozen: None,
             liquid: None,
             impulses: None,
+            bounds_time: None,
             time: 0.0,
             step: 0,
         })
@@ -242,7 +246,9 @@ impl GridSolver {
         self.ran.clear();
         if self.bodies.iter().any(RigidBody::is_moving) {
             self.ran.push("obstacles");
-            self.rebuild_boundaries(self.time + dt);
+            if self.bounds_time.take() != Some(self.time + dt) {
+                self.rebuild_boundaries(self.time + dt);
+            }
         }
 
         let t0 = Instant::now();

@@ -115,7 +115,7 @@ impl Stage for SurfaceExchange {
                 .map(|&(c_, v)| (c_ >= c.occupancy_threshold).then_some(v)),
         );
         let liquid_cells = liquid.cells.iter().filter(|&&c| c).count();
-        grid.set_liquid(liquid);
+        grid.set_liquid(liquid, rec.dt);
         let (drag, area) = exchange_drag(sph, grid, &field, c, rec.dt);
         let e = rec.exchange.get_or_insert_with(Exchange::default);
         e.drag = drag;
@@ -152,40 +152,50 @@ impl Stage for SurfacePressure {
             .into_iter()
             .map(|(cell, force)| (grid.mac.cell_center(cell), force * rec.dt))
             .collect();
-        let total = give_to_particles(sph, &impulses);
+        let (total, _) = give_to_particles(sph, &impulses);
         rec.exchange.get_or_insert_with(Exchange::default).pressure = total;
         Ok(())
     }
 }
 
 /// Adds each impulse (at a point, N s) to the particles near its point, shared by their kernel
-/// weights there; returns the impulse given (an impulse with no particle near is not).
-fn give_to_particles(sph: &mut SphSolver, impulses: &[(Vec3, Vec3)]) -> Vec3 {
+/// weights there; returns the impulse given and whether each was (one with no particle near
+/// is not).
+fn give_to_particles(sph: &mut SphSolver, impulses: &[(Vec3, Vec3)]) -> (Vec3, Vec<bool>) {
     let view = sph.velocity_source();
+    let shares: Vec<Vec<(usize, Vec3)>> = impulses
+        .par_iter()
+        .map(|(x, impulse)| {
+            let mut weights: Vec<(usize, Real)> = Vec::new();
+            view.for_each_weight(x, |j, w| weights.push((j, w)));
+            let sum: Real = weights.iter().map(|w| w.1).sum();
+            weights
+                .into_iter()
+                .map(|(j, w)| (j, impulse * (w / sum)))
+                .collect()
+        })
+        .collect();
     let mut dv = vec![Vec3::zeros(); sph.fluid.len()];
     let mut total = Vec3::zeros();
-    let mut weights: Vec<(usize, Real)> = Vec::new();
-    for (x, impulse) in impulses {
-        weights.clear();
-        view.for_each_weight(x, |j, w| weights.push((j, w)));
-        let sum: Real = weights.iter().map(|w| w.1).sum();
-        if sum <= 0.0 {
+    for ((_, impulse), share) in impulses.iter().zip(&shares) {
+        if share.is_empty() {
             continue;
         }
         total += impulse;
-        for &(j, w) in &weights {
-            dv[j] += impulse * (w / sum);
+        for (j, p) in share {
+            dv[*j] += p;
         }
     }
     let mass = sph.fluid.mass;
     for (v, dv) in sph.fluid.v.iter_mut().zip(&dv) {
         *v += dv / mass;
     }
-    total
+    (total, shares.iter().map(|s| !s.is_empty()).collect())
 }
 
 /// The particles' occupancy and Shepard velocity at the cell centres within the kernel's
-/// reach of the particles' bounding box (0 elsewhere).
+/// reach of the particles' bounding box (0 elsewhere); 1 and the particles' mean velocity in
+/// the cells inside the liquid.
 struct Occupancy {
     cells: Array3<(Real, Vec3)>,
     /// The cells sampled.
@@ -213,9 +223,39 @@ impl Occupancy {
             };
             sampled = [range(0), range(1), range(2)];
             let [rx, ry, rz] = sampled.clone();
-            let (x0, y0, z0) = (rx.start, ry.start, rz.start);
+            let origin = [rx.start, ry.start, rz.start];
+            let shape = [rx.len(), ry.len(), rz.len()];
+            // The particles binned into the sampled cells, with their summed velocities. A cell
+            // whose 26 neighbours all hold particles lies inside the liquid, where the
+            // occupancy is 1 up to sampling noise: it is set to 1 with the particles' mean
+            // velocity, and only the cells near the surface or a wall are sampled.
+            let mut bins = Array3::from_elem(shape, (0u32, Vec3::zeros()));
+            for (x, v) in sph.fluid.x.iter().zip(&sph.fluid.v) {
+                let g = mac.grid_coords(x);
+                let idx: [usize; 3] = std::array::from_fn(|a| {
+                    (g[a].floor().max(0.0) as usize).saturating_sub(origin[a])
+                });
+                if let Some(bin) = bins.get_mut(idx) {
+                    bin.0 += 1;
+                    bin.1 += v;
+                }
+            }
+            let interior = |[i, j, k]: [usize; 3]| {
+                let inner = (0..3).all(|a| [i, j, k][a] >= 1 && [i, j, k][a] + 1 < shape[a]);
+                inner
+                    && bins
+                        .slice(s![i - 1..=i + 1, j - 1..=j + 1, k - 1..=k + 1])
+                        .iter()
+                        .all(|b| b.0 > 0)
+            };
             Zip::indexed(cells.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), c| {
-                *c = view.occupancy(&mac.cell_center([x0 + i, y0 + j, z0 + k]));
+                *c = if interior([i, j, k]) {
+                    let (n, v) = bins[[i, j, k]];
+                    (1.0, v / n as Real)
+                } else {
+                    let idx = [origin[0] + i, origin[1] + j, origin[2] + k];
+                    view.occupancy(&mac.cell_center(idx))
+                };
             });
         }
         Self {
@@ -323,9 +363,9 @@ fn exchange_drag(
         })
         .collect();
     let impulses: Vec<(Vec3, Vec3)> = drag.iter().map(|d| (d.0, d.1)).collect();
-    let given = give_to_particles(sph, &impulses);
+    let (given, received) = give_to_particles(sph, &impulses);
     let air_mass = rho * dx.powi(3);
-    for (_, impulse, _, stencil) in &drag {
+    for ((_, impulse, _, stencil), _) in drag.iter().zip(&received).filter(|d| *d.1) {
         for (a, faces) in stencil.iter().enumerate() {
             for &(f, w) in faces.iter().filter(|f| f.1 > 0.0) {
                 grid.add_face_impulse(a, f, -impulse[a] * w / air_mass);

@@ -5,7 +5,7 @@
 
 use ndarray::{Array3, Zip};
 
-use super::mac::{cells_beside_face, MacGrid};
+use super::mac::{cell_beside, cells_beside_face, MacGrid};
 use super::params::GridSide;
 use super::solver::GridSolver;
 use crate::geometry::RigidBody;
@@ -104,8 +104,8 @@ impl GridSolver {
                 continue;
             }
             for a in 0..3 {
-                for sign in [-1.0, 1.0] {
-                    let Some(c) = step(idx[a], sign, dims[a], self.mac.periodic[a]) else {
+                for (sign, up) in [(-1.0, false), (1.0, true)] {
+                    let Some(c) = cell_beside(idx[a], up, dims[a], self.mac.periodic[a]) else {
                         continue;
                     };
                     let mut s = idx;
@@ -139,16 +139,5 @@ impl GridSolver {
             }
         }
         forces
-    }
-}
-
-/// The cell one step from `i` along an axis of `n` cells, wrapped on a periodic axis.
-fn step(i: usize, sign: Real, n: usize, periodic: bool) -> Option<usize> {
-    match (sign > 0.0, periodic) {
-        (true, _) if i + 1 < n => Some(i + 1),
-        (true, true) => Some(0),
-        (false, _) if i > 0 => Some(i - 1),
-        (false, true) => Some(n - 1),
-        _ => None,
     }
 }

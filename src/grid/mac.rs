@@ -354,6 +354,17 @@ pub fn cells_beside_face(face: usize, n: usize, periodic: bool) -> (Option<usize
     }
 }
 
+/// The cell next to cell `i` along an axis of `n` cells, above it (`up`) or below: wrapped on a
+/// periodic axis, None beyond the ends of another.
+#[inline]
+pub fn cell_beside(i: usize, up: bool, n: usize, periodic: bool) -> Option<usize> {
+    if up {
+        cells_beside_face(i + 1, n, periodic).1
+    } else {
+        cells_beside_face(i, n, periodic).0
+    }
+}
+
 /// As [`cells_beside_face`], with the one cell standing for both at a non-periodic end.
 #[inline]
 pub fn cells_beside_face_clamped(face: usize, n: usize, periodic: bool) -> (usize, usize) {

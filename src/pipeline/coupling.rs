@@ -35,6 +35,7 @@ use rayon::prelude::*;
 
 use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
+use crate::grid::mac::cell_beside;
 use crate::grid::{GridSolver, Liquid, MacGrid};
 use crate::scene::Coupling;
 use crate::sph::vortex_coupling::SphVelocity;
@@ -282,13 +283,8 @@ impl Occupancy {
         let mac = &grid.mac;
         let here = self.cells[idx].0;
         let at = |a: usize, up: bool| -> Real {
-            let (n, i) = (mac.dims[a], idx[a]);
-            let j = match (up, mac.periodic[a]) {
-                (true, _) if i + 1 < n => i + 1,
-                (true, true) => 0,
-                (false, _) if i > 0 => i - 1,
-                (false, true) => n - 1,
-                _ => return here,
+            let Some(j) = cell_beside(idx[a], up, mac.dims[a], mac.periodic[a]) else {
+                return here;
             };
             let mut m = idx;
             m[a] = j;

@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// Two short runs write the new columns consistently (total = linear + rotational + potential
 /// energy; vorticity mean <= max; enstrophy >= 0; refinement time only with a refinement), and
-/// `compare` draws them into one PNG.
+/// `compare` draws them into one PNG, or one SVG.
 #[test]
 fn metrics_columns_and_compare_figure() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -55,5 +55,17 @@ fn metrics_columns_and_compare_figure() {
     compare(&runs, &png).expect("plot");
     let bytes = std::fs::read(&png).expect("png written");
     assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 10_000);
+    // The same figure as an SVG for a paper: vector paths, and its titles and labels as text.
+    let svg = dir.path().join("compare.svg");
+    compare(&runs, &svg).expect("svg plot");
+    let text = std::fs::read_to_string(&svg).expect("svg written");
+    assert!(text.contains("<svg") && text.trim_end().ends_with("</svg>"));
+    for label in ["total energy (J)", "time (s)", "micropolar"] {
+        assert!(text.contains(label), "the SVG lacks {label:?}");
+    }
+    assert!(
+        text.matches("<polyline").count() >= 6,
+        "a curve per run and panel"
+    );
     assert!(compare(&[], &dir.path().join("none.png")).is_err());
 }

@@ -1,12 +1,17 @@
-//! PNG plots for `eddy compare`: energy and vorticity against time for several runs in one
-//! figure, the comparison every refinement paper shows (Liu et al. Fig. 7, Wang et al. Fig. 11,
-//! Ye et al. Fig. 10).
+//! Figures for `eddy compare`, `eddy plot-sweep` and `eddy bench-abl`: energy and vorticity
+//! against time for several runs in one figure (the comparison every refinement paper shows:
+//! Liu et al. Fig. 7, Wang et al. Fig. 11, Ye et al. Fig. 10), run time against error, and a
+//! study's curves or stability map. A figure is a PNG, or an SVG (vector, for a paper) when
+//! the output's name ends in `.svg`: every figure is drawn by one function generic over the
+//! plotters backend.
 //!
-//! Text is drawn with a bundled font (DejaVu Sans Mono, `assets/fonts`, free licence beside
-//! it) through ab_glyph, so plotting needs no system fonts or fontconfig.
+//! PNG text is drawn with a bundled font (DejaVu Sans Mono, `assets/fonts`, free licence beside
+//! it) through ab_glyph, so plotting needs no system fonts or fontconfig; SVG text names the
+//! font family and is drawn by the viewer.
 
 use super::IoError;
 use crate::Real;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use std::path::{Path, PathBuf};
@@ -109,14 +114,13 @@ fn register_bundled_font() {
     });
 }
 
-/// Draws energy and vorticity against time for `runs` into the PNG `out` (written under a
-/// temporary name and renamed when complete). Returns how many points were left out for a
+/// Draws energy and vorticity against time for `runs` into the PNG or SVG `out` (written under
+/// a temporary name and renamed when complete). Returns how many points were left out for a
 /// time or value that is not finite; the axes span the finite ones.
 pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
     if runs.is_empty() {
         return Err(IoError::invalid(out, "no runs to compare"));
     }
-    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
     let panels: Vec<_> = PANELS
         .iter()
         .filter(|(_, columns)| runs.iter().any(|r| r.curve(columns).is_some()))
@@ -127,7 +131,21 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
         panels
     };
     let height = 400 * panels.len() as u32;
-    with_png(out, (1200, height), |root| {
+    write_figure(out, (1200, height), Compare { runs, panels })
+}
+
+/// The figure of [`compare`].
+struct Compare<'a> {
+    runs: &'a [RunSeries],
+    panels: Vec<&'a (&'a str, &'a [&'a str])>,
+}
+
+impl Figure for Compare<'_> {
+    type Output = usize;
+
+    fn draw<DB: DrawingBackend>(self, root: &Canvas<DB>, out: &Path) -> Result<usize, IoError> {
+        let Self { runs, panels } = self;
+        let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
         let areas = root.split_evenly((panels.len(), 1));
         let mut skipped = 0;
         for (area, &&(title, columns)) in areas.iter().zip(&panels) {
@@ -179,21 +197,33 @@ pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
             legend(&mut chart).map_err(|e| fail(&e))?;
         }
         Ok(skipped)
-    })
+    }
 }
 
-type Canvas<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+/// The whole drawing area of a figure on backend `DB`.
+type Canvas<DB> = DrawingArea<DB, Shift>;
 
 /// A chart with linear axes, as `compare` and the profile panel draw them.
-type LinearChart<'a, 'b> = ChartContext<
+type LinearChart<'a, DB> = ChartContext<
     'a,
-    BitMapBackend<'b>,
+    DB,
     Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
 >;
 
+/// A figure that draws itself on any backend ([`write_figure`] picks PNG or SVG).
+trait Figure {
+    type Output;
+    /// Draws onto the white `root`; `out` names the file in errors.
+    fn draw<DB: DrawingBackend>(
+        self,
+        root: &Canvas<DB>,
+        out: &Path,
+    ) -> Result<Self::Output, IoError>;
+}
+
 /// Draws curve `k` of a figure in the `k`-th palette colour, with its legend entry.
-fn line(
-    chart: &mut LinearChart<'_, '_>,
+fn line<DB: DrawingBackend>(
+    chart: &mut LinearChart<'_, DB>,
     k: usize,
     label: &str,
     points: impl IntoIterator<Item = (Real, Real)>,
@@ -222,27 +252,52 @@ where
         .map_err(|e| e.to_string())
 }
 
-/// Draws into a white PNG of `size` pixels with the bundled font, under a temporary name
-/// renamed to `out` when complete, so `out` is never half drawn.
-fn with_png<T>(
-    out: &Path,
-    size: (u32, u32),
-    draw: impl FnOnce(&Canvas<'_>) -> Result<T, IoError>,
-) -> Result<T, IoError> {
+/// Draws `figure` into a white image of `size` pixels: an SVG when `out` ends in `.svg`, else a
+/// bitmap in the format its extension names (PNG for eddy's figures, with the bundled font).
+/// It is drawn under a temporary name and renamed to `out` when complete, so `out` is never
+/// half drawn.
+fn write_figure<F: Figure>(out: &Path, size: (u32, u32), figure: F) -> Result<F::Output, IoError> {
     register_bundled_font();
     let name = out
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "plot.png".into());
-    let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.png"));
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_else(|| "png".into());
+    let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.{ext}"));
     let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
-    let result = {
-        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+    fn on<DB: DrawingBackend, F: Figure>(
+        root: Canvas<DB>,
+        figure: F,
+        out: &Path,
+        fail: impl Fn(&dyn std::fmt::Display) -> IoError,
+    ) -> Result<F::Output, IoError> {
         root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let result = draw(&root)?;
+        let result = figure.draw(&root, out)?;
         root.present().map_err(|e| fail(&e))?;
-        result
+        Ok(result)
+    }
+    let result = if ext == "svg" {
+        on(
+            SVGBackend::new(&tmp, size).into_drawing_area(),
+            figure,
+            out,
+            fail,
+        )
+    } else {
+        on(
+            BitMapBackend::new(&tmp, size).into_drawing_area(),
+            figure,
+            out,
+            fail,
+        )
     };
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    let result = result?;
     std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))?;
     Ok(result)
 }
@@ -266,17 +321,41 @@ pub struct CurvePanel<'a> {
 }
 
 /// Error against wall time, log-log, one panel per error (titled by `panels`), one marker per
-/// run; then `profile` drawn as lines. Into the PNG `out`, written under a temporary name and
-/// renamed.
+/// run; then `profile` drawn as lines. Into the PNG or SVG `out`, written under a temporary
+/// name and renamed.
 pub fn error_figure(
     out: &Path,
     panels: &[&str],
     points: &[ErrorPoint],
     profile: CurvePanel<'_>,
 ) -> Result<(), IoError> {
-    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
     let rows = panels.len() + 1;
-    with_png(out, (1200, 400 * rows as u32), |root| {
+    let figure = ErrorFigure {
+        panels,
+        points,
+        profile,
+    };
+    write_figure(out, (1200, 400 * rows as u32), figure)
+}
+
+/// The figure of [`error_figure`].
+struct ErrorFigure<'a> {
+    panels: &'a [&'a str],
+    points: &'a [ErrorPoint],
+    profile: CurvePanel<'a>,
+}
+
+impl Figure for ErrorFigure<'_> {
+    type Output = ();
+
+    fn draw<DB: DrawingBackend>(self, root: &Canvas<DB>, out: &Path) -> Result<(), IoError> {
+        let Self {
+            panels,
+            points,
+            profile,
+        } = self;
+        let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+        let rows = panels.len() + 1;
         let areas = root.split_evenly((rows, 1));
         for (p, (area, title)) in areas.iter().zip(panels).enumerate() {
             let shown: Vec<(usize, f64, Real)> = points
@@ -355,13 +434,13 @@ pub fn error_figure(
         }
         legend(&mut chart).map_err(|e| fail(&e))?;
         Ok(())
-    })
+    }
 }
 
 /// Curves of a parameter study, `y` against `x` (log-log, or linear axes with `log = false`),
 /// one per group with a marker at each run (markers alone with `lines = false`: a stability
-/// map of two varied keys, grouped by status), into the PNG `out` (written under a temporary
-/// name and renamed). Points that a log axis cannot show (zero, negative, not finite) are left
+/// map of two varied keys, grouped by status), into the PNG or SVG `out` (written under a
+/// temporary name and renamed). Points that a log axis cannot show (zero, negative, not finite) are left
 /// out and counted in the result.
 pub fn study_figure(
     out: &Path,
@@ -370,7 +449,6 @@ pub fn study_figure(
     log: bool,
     lines: bool,
 ) -> Result<usize, IoError> {
-    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
     let shown =
         |p: &(Real, Real)| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0));
     let kept: Vec<(String, Vec<(Real, Real)>)> = curves
@@ -385,7 +463,39 @@ pub fn study_figure(
     if !(x1 >= x0 && y1 >= y0) {
         return Err(IoError::invalid(out, "plotting: no point to show"));
     }
-    with_png(out, (1000, 700), |root| {
+    let figure = Study {
+        labels,
+        curves: &kept,
+        ranges: (x0..x1, y0..y1),
+        log,
+        lines,
+    };
+    write_figure(out, (1000, 700), figure)?;
+    Ok(left_out)
+}
+
+/// The figure of [`study_figure`]: the curves it keeps and the ranges they span.
+struct Study<'a> {
+    labels: (&'a str, &'a str),
+    curves: &'a [(String, Vec<(Real, Real)>)],
+    ranges: (std::ops::Range<Real>, std::ops::Range<Real>),
+    log: bool,
+    lines: bool,
+}
+
+impl Figure for Study<'_> {
+    type Output = ();
+
+    fn draw<DB: DrawingBackend>(self, root: &Canvas<DB>, out: &Path) -> Result<(), IoError> {
+        let Self {
+            labels,
+            curves: kept,
+            ranges: (x, y),
+            log,
+            lines,
+        } = self;
+        let (x0, x1, y0, y1) = (x.start, x.end, y.start, y.end);
+        let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
         let mut chart = ChartBuilder::on(root);
         chart.margin(16).x_label_area_size(48).y_label_area_size(96);
         if log {
@@ -395,7 +505,7 @@ pub fn study_figure(
                     ((y0 / 1.5)..(y1 * 1.5)).log_scale(),
                 )
                 .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, labels, &kept, lines).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, kept, lines).map_err(|e| fail(&e))?;
         } else {
             let pad = |a: Real, b: Real| 0.05 * (b - a).max(1e-12);
             let mut c = chart
@@ -404,16 +514,16 @@ pub fn study_figure(
                     (y0 - pad(y0, y1))..(y1 + pad(y0, y1)),
                 )
                 .map_err(|e| fail(&e))?;
-            draw_curves(&mut c, labels, &kept, lines).map_err(|e| fail(&e))?;
+            draw_curves(&mut c, labels, kept, lines).map_err(|e| fail(&e))?;
         }
-        Ok(left_out)
-    })
+        Ok(())
+    }
 }
 
 /// The axes (labelled `labels`, ticks in scientific notation) and curves of
 /// [`study_figure`], a line and markers each, with the legend.
-fn draw_curves<'a, X, Y>(
-    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+fn draw_curves<'a, DB: DrawingBackend + 'a, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     labels: (&str, &str),
     curves: &[(String, Vec<(Real, Real)>)],
     lines: bool,

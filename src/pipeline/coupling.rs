@@ -3,9 +3,10 @@
 //! other and never creates it, so what the water gains the air loses.
 //!
 //! Both directions go through the grid's cells. The particles' occupancy
-//! c(x) = sum_j V_j W(x - x_j) and their Shepard-normalised velocity are sampled at every cell
-//! centre near the water; c is 1 inside the liquid and 0 outside it. The order in a step, all
-//! at the state the step starts from:
+//! c(x) = sum_j V_j W(x - x_j) / (1 - sum_b V_b W(x - x_b)) (the walls' share of the kernel
+//! divided out) and their Shepard-normalised velocity are sampled at every cell centre near the
+//! water; c is 1 inside the liquid, beside walls too, and 0 outside it. The order in a step,
+//! all at the state the step starts from:
 //!
 //! 1. **liquid** (water on air): cells with c at or above the threshold are a moving solid for
 //!    the air; the faces beside them carry the water's velocity at those cells' centres (the

@@ -2,5 +2,6 @@
 //! library.
 
 pub mod abl;
+pub mod analytic;
 pub mod bench;
 pub mod sweep;

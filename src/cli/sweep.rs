@@ -15,6 +15,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 
+use super::analytic::Analytic;
+
 /// Options of `eddy sweep`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SweepArgs {
@@ -46,9 +48,13 @@ pub struct SweepArgs {
     /// sweep.csv (default: sweep.csv in the first folder).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Error of each run against an analytic solution eddy knows: `taylor-green` (a scene
-    /// with grid.initial_flow = "taylor_green"): the largest |ln(E / E_exact)| of the energy
-    /// decay over the run, column `error_taylor_green`.
+    /// Error of each run against an analytic solution eddy knows (README, "Parameter
+    /// studies"): `taylor-green` (a scene with grid.initial_flow = "taylor_green"): the largest
+    /// |ln(E / E_exact)| of the energy decay over the run; `hydrostatic` (a fluid with gravity
+    /// and point probes): the probes' pressure over the run's second half against rho |g|
+    /// depth; `poiseuille` (a grid channel periodic in x between walls at y, driven by gravity
+    /// along x with grid.gravity = true): the line probes' u at the end against the flow
+    /// started from rest. Column `error_<name>`.
     #[arg(long, value_enum)]
     pub analytic: Option<Analytic>,
     /// A reference run's folder: each --compare column of the runs is compared with its own
@@ -181,17 +187,11 @@ pub fn plot(args: &PlotArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Analytic solutions a sweep can measure its runs against.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Analytic {
-    TaylorGreen,
-}
-
 /// What each run is measured against: a column of sweep.csv each.
 #[derive(Debug, Clone)]
 enum Measure {
-    /// The largest value of a metrics column the run computes itself.
-    LargestMetric { column: &'static str },
+    /// An analytic solution eddy knows.
+    Analytic(Analytic),
     /// A series of the run against the same series of a reference (time or s, value), from
     /// the run's `file` (metrics, probes, profile_NAME; None: metrics or probes, whichever has
     /// the column).
@@ -208,7 +208,7 @@ enum Measure {
 impl Measure {
     fn name(&self) -> String {
         match self {
-            Measure::LargestMetric { .. } => "error_taylor_green".into(),
+            Measure::Analytic(a) => a.column().into(),
             Measure::Series { name, .. } => format!("error_{name}"),
         }
     }
@@ -216,10 +216,7 @@ impl Measure {
     /// The error of the run in `dir`; None when it has no such series.
     fn error(&self, dir: &Path) -> Option<f64> {
         match self {
-            Measure::LargestMetric { column } => {
-                let values = series(&dir.join("metrics.csv"), "time", column)?;
-                values.iter().map(|&(_, v)| v).reduce(f64::max)
-            }
+            Measure::Analytic(a) => a.error(dir),
             Measure::Series {
                 file,
                 along,
@@ -243,10 +240,8 @@ impl Measure {
 /// The measures `args` ask for, their references read and checked before any run.
 fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
     let mut out = Vec::new();
-    if let Some(Analytic::TaylorGreen) = args.analytic {
-        out.push(Measure::LargestMetric {
-            column: "taylor_green_error",
-        });
+    if let Some(a) = args.analytic {
+        out.push(Measure::Analytic(a));
     }
     if let Some(dir) = &args.reference {
         for c in &args.compare {
@@ -302,7 +297,7 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
 
 /// (`along`, value) of `column` of a CSV with an `along` column (time, or s of a profile);
 /// None when either is missing.
-fn series(path: &Path, along: &str, column: &str) -> Option<Vec<(f64, f64)>> {
+pub(super) fn series(path: &Path, along: &str, column: &str) -> Option<Vec<(f64, f64)>> {
     let mut reader = csv::Reader::from_path(path).ok()?;
     let header = reader.headers().ok()?.clone();
     let t = header.iter().position(|h| h == along)?;
@@ -595,6 +590,10 @@ pub fn run(args: &SweepArgs, exe: &Path) -> anyhow::Result<()> {
     for (i, values) in all.iter().enumerate() {
         let scene = eddy::scene::load(scene_path, &overrides(&args.set, &axes, values))
             .with_context(|| format!("point {i} ({})", describe(&axes, values)))?;
+        if let Some(a) = args.analytic {
+            a.check(&scene)
+                .with_context(|| format!("point {i} ({})", describe(&axes, values)))?;
+        }
         name = scene.name;
     }
     let out = args

@@ -12,7 +12,7 @@ use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, buoyancy, confinement};
 use super::mac::MacGrid;
-use super::params::{Advection, GridParams, Smoke, SmokeSource};
+use super::params::{Advection, GridParams, Smoke, SmokeSource, ViscosityScheme};
 use super::poisson::{CellKind, PoissonSystem, SolveError};
 use super::project::{max_divergence, project};
 use super::viscosity::diffuse_component;
@@ -488,10 +488,18 @@ impl GridSolver {
         dt: Real,
         stats: &mut GridStepStats,
     ) -> Result<(), GridError> {
+        // Crank–Nicolson takes the forces as its right-hand side, so it keeps the velocity
+        // before them (`viscosity::diffuse_component`).
+        let unforced = (self.params.viscosity > 0.0
+            && self.params.viscosity_scheme == ViscosityScheme::CrankNicolson)
+            .then(|| {
+                self.bounds.apply(&mut self.mac);
+                self.mac.u.clone()
+            });
         self.apply_forces(dt);
         self.bounds.apply(&mut self.mac);
         if self.params.viscosity > 0.0 {
-            stats.viscosity_iterations = self.diffuse(dt)?;
+            stats.viscosity_iterations = self.diffuse(dt, unforced.as_ref())?;
         }
         Ok(())
     }
@@ -530,7 +538,7 @@ impl GridSolver {
         });
         self.bounds.apply(&mut self.mac);
         if self.params.viscosity > 0.0 {
-            stats.viscosity_iterations = self.diffuse(dt)?;
+            stats.viscosity_iterations = self.diffuse(dt, None)?;
         }
         let t2 = Instant::now();
         let second = self.project(half)?;
@@ -603,8 +611,13 @@ impl GridSolver {
         }
     }
 
-    /// Backward-Euler viscosity, one solve per component; returns the most iterations any took.
-    fn diffuse(&mut self, dt: Real) -> Result<usize, GridError> {
+    /// Implicit viscosity, one solve per component, `unforced` the faces before this step's
+    /// forces (for Crank–Nicolson); returns the most iterations any solve took.
+    fn diffuse(
+        &mut self,
+        dt: Real,
+        unforced: Option<&[Array3<Real>; 3]>,
+    ) -> Result<usize, GridError> {
         self.ran.push("viscosity");
         let a = self.params.viscosity * dt / (self.mac.dx * self.mac.dx);
         let mut iterations = 0;
@@ -615,6 +628,7 @@ impl GridSolver {
                 a,
                 self.params.viscosity_scheme,
                 &mut self.mac.u[c],
+                unforced.map(|u| &u[c]),
                 &self.params.pressure,
                 &mut self.diffusion[c],
             )

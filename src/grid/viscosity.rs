@@ -4,7 +4,12 @@
 //! knows the mirror ghost -x_i, and the difference, 2 a g, moves to the right-hand side.
 //! Crank–Nicolson needs no explicit operator: with y the backward-Euler solution over half the
 //! coefficient, (1 + a/2 L) y = u, the Crank–Nicolson value (1 + a/2 L)^-1 (1 - a/2 L) u is
-//! exactly 2 y - u.
+//! exactly 2 y - u. The step's forces f dt belong to the right-hand side, not under the
+//! explicit half: with u0 the velocity before them and u = u0 + f dt, the update
+//! (1 + a/2 L)^-1 ((1 - a/2 L) u0 + f dt) is 2 y - u0 with (1 + a/2 L) y = (u0 + u) / 2.
+//! Treating u as the old velocity instead leaves -(a/2) L f dt, which a constant force makes
+//! non-zero beside a no-slip wall (its ghost mirrors it): the forced channel's flow was first
+//! order in dt and its steady state wrong there (`tests/sweep.rs`, plane Poiseuille).
 //!
 //! The caller keeps each component's [`DiffusionSystem`] between steps: it is rebuilt only when
 //! the unknown faces, the sides or `a` change.
@@ -18,21 +23,27 @@ use super::poisson::{SolveError, SolveStats, SolverSettings};
 use crate::Real;
 
 /// Diffuses component `c` of the faces over one step, a = nu dt / dx^2, with the fixed faces
-/// of `bounds` held; `system` is the component's system of the last call (None at first),
-/// reused when it still applies and replaced otherwise.
+/// of `bounds` held; `unforced` is the component before this step's forces (None: `u` is),
+/// which Crank–Nicolson needs (module doc); `system` is the component's system of the last
+/// call (None at first), reused when it still applies and replaced otherwise.
+#[allow(clippy::too_many_arguments)]
 pub fn diffuse_component(
     bounds: &Boundaries,
     c: usize,
     a: Real,
     scheme: ViscosityScheme,
     u: &mut Array3<Real>,
+    unforced: Option<&Array3<Real>>,
     settings: &SolverSettings,
     system: &mut Option<DiffusionSystem>,
 ) -> Result<SolveStats, SolveError> {
     match scheme {
         ViscosityScheme::BackwardEuler => backward_euler(bounds, c, a, u, settings, system),
         ViscosityScheme::CrankNicolson => {
-            let old = u.clone();
+            let old = unforced.map_or_else(|| u.clone(), Array3::clone);
+            Zip::from(&mut *u)
+                .and(&old)
+                .par_for_each(|u, &u0| *u = 0.5 * (*u + u0));
             let stats = backward_euler(bounds, c, 0.5 * a, u, settings, system)?;
             Zip::from(u)
                 .and(&old)

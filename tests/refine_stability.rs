@@ -1,5 +1,5 @@
 //! The refinements in a running solver, on the small sloshing tank of
-//! `scenes/refine_sloshing.toml` (378 fluid particles): zero parameters change nothing, and at
+//! `scenes/refine_sloshing.toml` (750 fluid particles): zero parameters change nothing, and at
 //! the papers' defaults every method stays finite and in the tank (in front of its walls'
 //! boundary samples) for 5 000 steps while VRSPH
 //! (alpha = 1) and Rankine (beta = 1) settle to DFSPH's kinetic energy.

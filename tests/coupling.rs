@@ -86,9 +86,10 @@ fn water_momentum(p: &Pipeline) -> Vec3 {
 /// water's), where no gravity, wall or obstacle acts along x.
 #[test]
 fn a_coupled_step_conserves_the_momentum_of_air_and_water() {
-    let mut p = Pipeline::build(&scene(FLOATING_BLOCK, &[]).unwrap()).unwrap();
+    let mut p = Pipeline::build(&scene(FLOATING_BLOCK, &[]).expect("scene parses"))
+        .expect("pipeline builds");
     let before = water_momentum(&p).x + air_momentum(&p, 0);
-    let rec = p.step(None, None).unwrap();
+    let rec = p.step(None, None).expect("stable step");
     let e = rec.exchange.expect("a coupled step reports its exchange");
     let water = water_momentum(&p).x;
     // Both terms act and slow the block: the drag of the still air, and the pressure of the
@@ -107,10 +108,11 @@ fn a_coupled_step_conserves_the_momentum_of_air_and_water() {
 /// velocity.
 #[test]
 fn moving_water_is_a_solid_boundary_for_the_air() {
-    let mut p = Pipeline::build(&scene(FLOATING_BLOCK, &[]).unwrap()).unwrap();
-    let rec = p.step(None, None).unwrap();
-    let grid = p.sim.grid.as_ref().unwrap();
-    let stats = rec.grid.unwrap();
+    let mut p = Pipeline::build(&scene(FLOATING_BLOCK, &[]).expect("scene parses"))
+        .expect("pipeline builds");
+    let rec = p.step(None, None).expect("stable step");
+    let grid = p.sim.grid.as_ref().expect("a grid");
+    let stats = rec.grid.expect("the grid stepped");
     let speed = 0.5;
     assert!(
         stats.max_divergence <= 1e-5 * speed / grid.mac.dx,
@@ -201,15 +203,15 @@ metrics = []
 /// the applied stress tau = rho_air C_d U^2 over the water's mass per area (within 10 %).
 #[test]
 fn wind_drag_accelerates_the_water_by_the_surface_stress() {
-    let s = scene(WIND_OVER_LAYER, &[]).unwrap();
-    let mut p = Pipeline::build(&s).unwrap();
-    let sph = p.sim.sph.as_ref().unwrap();
+    let s = scene(WIND_OVER_LAYER, &[]).expect("scene parses");
+    let mut p = Pipeline::build(&s).expect("pipeline builds");
+    let sph = p.sim.sph.as_ref().expect("an SPH fluid");
     let mass = sph.fluid.mass * sph.fluid.len() as Real;
     let area = 0.8 * 0.4;
     let before = water_momentum(&p).x;
-    let rec = p.step(None, None).unwrap();
+    let rec = p.step(None, None).expect("stable step");
     let accel = (water_momentum(&p).x - before) / (mass * rec.dt);
-    let (u, c) = (6.0, s.coupling.as_ref().unwrap());
+    let (u, c) = (6.0, s.coupling.as_ref().expect("[coupling]"));
     let expected = c.air_density * c.drag_coefficient * u * u * area / mass;
     assert!(
         (accel / expected - 1.0).abs() <= 0.1,
@@ -231,12 +233,16 @@ fn the_drag_area_is_the_surface_area_as_the_particles_move() {
         WIND_OVER_LAYER,
         &["grid.initial_velocity=[0.0,0.0,0.0]", "time.steps=150"],
     )
-    .unwrap();
-    let mut p = Pipeline::build(&s).unwrap();
+    .expect("scene parses");
+    let mut p = Pipeline::build(&s).expect("pipeline builds");
     let area = 0.8 * 0.4;
     let (mut lo, mut hi) = (Real::INFINITY, 0.0 as Real);
     for _ in 0..150 {
-        let e = p.step(None, None).unwrap().exchange.unwrap();
+        let e = p
+            .step(None, None)
+            .expect("stable step")
+            .exchange
+            .expect("a coupled step records its exchange");
         lo = lo.min(e.area);
         hi = hi.max(e.area);
     }
@@ -265,7 +271,12 @@ fn coupling_without_both_media_or_out_of_range_is_refused() {
         let err = scene(FLOATING_BLOCK, overrides).unwrap_err().to_string();
         assert!(err.contains(key), "{overrides:?}: {err}");
     }
-    let without_grid = FLOATING_BLOCK.split("[grid]").next().unwrap().to_owned() + "[coupling]\n";
+    let without_grid = FLOATING_BLOCK
+        .split("[grid]")
+        .next()
+        .expect("the text before [grid]")
+        .to_owned()
+        + "[coupling]\n";
     let err = scene(&without_grid, &[]).unwrap_err().to_string();
     assert!(
         err.contains("[coupling]") && err.contains("no [grid]"),
@@ -281,7 +292,7 @@ fn coupling_without_both_media_or_out_of_range_is_refused() {
 /// below it.
 #[test]
 fn a_ball_through_the_surface_seeds_both_media() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = tempfile::tempdir().expect("temp dir");
     let db = common::ball_database(dir.path(), 0.06);
     let text = format!(
         r#"
@@ -323,10 +334,20 @@ motion = {{ linear = [1.0, 0.0, 0.0] }}
     let turbulence = plan.iter().filter(|s| *s == "turbulence").count();
     assert_eq!(turbulence, 2, "one turbulence stage per medium: {plan:?}");
     for _ in 0..40 {
-        p.step(None, None).unwrap();
+        p.step(None, None).expect("stable step");
     }
-    let air = &p.sim.grid_turbulence.as_ref().unwrap().vortices;
-    let water = &p.sim.sph_turbulence.as_ref().unwrap().vortices;
+    let air = &p
+        .sim
+        .grid_turbulence
+        .as_ref()
+        .expect("turbulence in the air")
+        .vortices;
+    let water = &p
+        .sim
+        .sph_turbulence
+        .as_ref()
+        .expect("turbulence in the water")
+        .vortices;
     assert!(
         !air.is_empty() && !water.is_empty(),
         "{} in the air, {} in the water",
@@ -350,9 +371,9 @@ motion = {{ linear = [1.0, 0.0, 0.0] }}
 /// and `/grid` link to their indexes, and every frame of each is readable through it.
 #[test]
 fn one_frames_file_opens_both_media() {
-    let out = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().expect("temp dir");
     let file = out.path().join("wind.toml");
-    std::fs::write(&file, WIND_OVER_LAYER).unwrap();
+    std::fs::write(&file, WIND_OVER_LAYER).expect("writes the scene");
     let options = eddy::pipeline::RunOptions {
         out: Some(out.path().join("run")),
         overrides: vec![
@@ -364,20 +385,30 @@ fn one_frames_file_opens_both_media() {
     };
     let summary = {
         let _serial = common::hdf5_or_child();
-        eddy::pipeline::run(&file, &options).unwrap()
+        eddy::pipeline::run(&file, &options).expect("the run finishes")
     };
     let _serial = common::hdf5_or_child();
-    let h5 = hdf5::File::open(out.path().join("run/frames.h5")).unwrap();
-    let scene: hdf5::types::VarLenUnicode = h5.attr("scene").unwrap().read_scalar().unwrap();
+    let h5 = hdf5::File::open(out.path().join("run/frames.h5")).expect("frames.h5 opens");
+    let scene: hdf5::types::VarLenUnicode = h5
+        .attr("scene")
+        .expect("a scene attribute")
+        .read_scalar()
+        .expect("a string");
     assert_eq!(scene.as_str(), "wind_over_layer");
     for (kind, columns) in [("particles", "position"), ("grid", "velocity")] {
         let frames = h5
             .group(&format!("{kind}/frames"))
-            .unwrap()
+            .expect("a frames group")
             .member_names()
-            .unwrap();
+            .expect("its members");
         assert_eq!(frames.len(), summary.frames, "{kind}: {frames:?}");
-        let last = format!("{kind}/frames/{}/{columns}", frames.last().unwrap());
-        assert!(h5.dataset(&last).unwrap().size() > 0, "{last} is empty");
+        let last = format!(
+            "{kind}/frames/{}/{columns}",
+            frames.last().expect("a frame")
+        );
+        assert!(
+            h5.dataset(&last).expect("the dataset").size() > 0,
+            "{last} is empty"
+        );
     }
 }

@@ -609,11 +609,11 @@ motion = { linear = [1.0, 0.0, 0.0] }
 density = 1.0
 "#,
     );
-    let mut grid = grid_solver(&s).unwrap();
+    let mut grid = grid_solver(&s).expect("grid builds");
     while grid.time() < 0.3 - 1e-9 {
-        grid.step(Some(0.3)).unwrap();
+        grid.step(Some(0.3)).expect("stable");
     }
-    let density = &grid.smoke.as_ref().unwrap().density;
+    let density = &grid.smoke.as_ref().expect("smoke").density;
     let at = |x: Real| density[[(x / 0.025) as usize, 5, 5]];
     // The last step applied the source at t = 0.29 s, centred at x = 0.49 m.
     assert_eq!(at(0.49), 1.0, "at the source's last position");

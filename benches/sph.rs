@@ -10,5 +10,6 @@ fn main() -> Result<(), eddy::pipeline::RunError> {
         refinements: Vec::new(),
         mcvsph_error: false,
         passes: false,
+        floors: true,
     })
 }

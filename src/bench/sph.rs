@@ -32,6 +32,9 @@ pub struct BenchOptions {
     /// Also time VRSPH's four neighbour passes at each size against the floor of passes that
     /// load the same data and do no arithmetic.
     pub passes: bool,
+    /// Also print each phase of the DFSPH step against its data-movement floor
+    /// (see [`super::floors`]).
+    pub floors: bool,
 }
 
 /// One measured configuration.
@@ -49,6 +52,7 @@ pub struct BenchResult {
     /// Milliseconds per step in the pressure solve.
     pub pressure_ms: f64,
     pub pressure_iterations: f64,
+    pub divergence_iterations: f64,
     pub bytes_per_particle: f64,
     /// Milliseconds per step in the turbulence refinement.
     pub refinement_ms: f64,
@@ -126,7 +130,17 @@ pub fn measure_with(
     let scene = dam_break_scene_with(edge, solver, extra);
     let mut sph = sph_solver(&scene)?;
     advance(&mut sph, warmup)?;
+    measure_solver(&mut sph, solver, steps)
+}
+
+/// Times `steps` more steps of `sph`, which runs `solver`.
+fn measure_solver(
+    sph: &mut SphSolver,
+    solver: PressureSolverKind,
+    steps: u64,
+) -> Result<BenchResult, RunError> {
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
+    let mut divergence_iterations = 0.0;
     let (mut update, mut divergence, mut pressure) = (0.0, 0.0, 0.0);
     for _ in 0..steps {
         let t0 = Instant::now();
@@ -137,10 +151,11 @@ pub fn measure_with(
         total += t0.elapsed().as_secs_f64();
         update += t1.elapsed().as_secs_f64();
         iterations += stats.pressure.iterations as f64;
+        divergence_iterations += stats.divergence.iterations as f64;
         refine += stats.refinement_seconds;
         divergence += stats.divergence_seconds;
         pressure += stats.pressure_seconds;
-        search += time_neighbor_search(&sph);
+        search += time_neighbor_search(sph);
     }
     let ms = |seconds: f64| 1e3 * seconds / steps as f64;
     Ok(BenchResult {
@@ -153,6 +168,7 @@ pub fn measure_with(
         divergence_ms: ms(divergence),
         pressure_ms: ms(pressure),
         pressure_iterations: iterations / steps as f64,
+        divergence_iterations: divergence_iterations / steps as f64,
         bytes_per_particle: sph.memory_bytes() as f64 / sph.fluid.len() as f64,
         refinement_ms: ms(refine),
     })
@@ -215,7 +231,9 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
                     )))
                 }
             };
-            let r = measure(edge, solver, args.warmup, args.steps)?;
+            let mut sph = sph_solver(&dam_break_scene(edge, solver))?;
+            advance(&mut sph, args.warmup)?;
+            let r = measure_solver(&mut sph, solver, args.steps)?;
             println!(
                 "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>10.1} {:>8.1} {:>10.1} {:>8.1} {:>12.3} {:>10.0}",
                 name,
@@ -230,11 +248,25 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
                 r.fluid as f64 / r.ms_per_step / 1e3,
                 r.bytes_per_particle
             );
+            if args.floors && solver == PressureSolverKind::Dfsph {
+                super::floors::print(&sph, &r, super::floors::read_bandwidth());
+            }
         }
     }
     super::refine::run(args)?;
     if let Some(rss) = peak_rss() {
-        println!("peak resident memory: {:.1} MiB", rss as f64 / 1048576.0);
+        let note = if args.floors {
+            format!(
+                " (with the {} MiB buffer of the bandwidth measurement)",
+                super::floors::BANDWIDTH_BUFFER >> 20
+            )
+        } else {
+            String::new()
+        };
+        println!(
+            "peak resident memory: {:.1} MiB{note}",
+            rss as f64 / 1048576.0
+        );
     }
     Ok(())
 }

@@ -35,6 +35,11 @@ pub struct BenchArgs {
     /// load the same data and do no arithmetic.
     #[arg(long)]
     pub passes: bool,
+    /// Also print each phase of the DFSPH step (search, pair cache, divergence, pressure, the
+    /// rest) against its data-movement floor: the bytes it must move at the measured read
+    /// bandwidth.
+    #[arg(long)]
+    pub floors: bool,
 }
 
 impl From<BenchArgs> for BenchOptions {
@@ -47,6 +52,7 @@ impl From<BenchArgs> for BenchOptions {
             refinements: a.refinements,
             mcvsph_error: a.mcvsph_error,
             passes: a.passes,
+            floors: a.floors,
         }
     }
 }

@@ -4,11 +4,11 @@
 
 use std::time::Instant;
 
-use ndarray::{Array3, Zip};
+use ndarray::{s, Array3, Zip};
 
 use super::advect::{advect, advect_velocity, advect_velocity_into};
 use super::average::RunningAverage;
-use super::boundary::Boundaries;
+use super::boundary::{cells_near, Boundaries};
 use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, buoyancy, confinement};
 use super::mac::MacGrid;
@@ -793,6 +793,8 @@ fn source_region(
 }
 
 /// The cells (and with `faces` the faces of each component) whose centres lie in `body` at `t`.
+/// Only the samples under the body's bounding box (a cell wider on every side, so the faces
+/// on its edges are in) are tested: a moving source is placed again every step.
 #[allow(clippy::type_complexity)]
 fn source_cells(
     mac: &MacGrid,
@@ -804,14 +806,27 @@ fn source_cells(
     let inside = |x: Vec3| {
         body.signed_distance_local(&pose.inverse_transform_point(&Point3::from(x))) <= 0.0
     };
-    let mut cells = Array3::from_elem(mac.dims, false);
-    Zip::indexed(&mut cells).par_for_each(|(i, j, k), c| *c = inside(mac.cell_center([i, j, k])));
+    let near = cells_near(mac, body, t, mac.dx);
+    // Marks the samples of a `shape` array inside the body, `at` their centres; the ranges
+    // reach one further along `face` (a face array has a sample more along its own axis).
+    let mark =
+        |shape: [usize; 3], face: Option<usize>, at: &(dyn Fn([usize; 3]) -> Vec3 + Sync)| {
+            let mut out = Array3::from_elem(shape, false);
+            let [rx, ry, rz]: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| {
+                let end = near[a].end + usize::from(face == Some(a));
+                near[a].start..end.min(out.shape()[a])
+            });
+            let origin = [rx.start, ry.start, rz.start];
+            Zip::indexed(out.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), m| {
+                *m = inside(at([origin[0] + i, origin[1] + j, origin[2] + k]))
+            });
+            out
+        };
+    let cells = mark(mac.dims, None, &|c| mac.cell_center(c));
     let faces = faces.then(|| {
         std::array::from_fn(|a| {
-            let mut f = Array3::from_elem(mac.u[a].raw_dim(), false);
-            Zip::indexed(&mut f)
-                .par_for_each(|(i, j, k), f| *f = inside(mac.face_center(a, [i, j, k])));
-            f
+            let (x, y, z) = mac.u[a].dim();
+            mark([x, y, z], Some(a), &|f| mac.face_center(a, f))
         })
     });
     (cells, faces)

@@ -40,13 +40,23 @@ pub fn diffuse_component(
     match scheme {
         ViscosityScheme::BackwardEuler => backward_euler(bounds, c, a, u, settings, system),
         ViscosityScheme::CrankNicolson => {
-            let old = unforced.map_or_else(|| u.clone(), Array3::clone);
-            Zip::from(&mut *u)
-                .and(&old)
-                .par_for_each(|u, &u0| *u = 0.5 * (*u + u0));
+            // Without forces u0 is u itself, and the half-sum below is u already.
+            let copy;
+            let old = match unforced {
+                Some(u0) => {
+                    Zip::from(&mut *u)
+                        .and(u0)
+                        .par_for_each(|u, &u0| *u = 0.5 * (*u + u0));
+                    u0
+                }
+                None => {
+                    copy = u.clone();
+                    &copy
+                }
+            };
             let stats = backward_euler(bounds, c, 0.5 * a, u, settings, system)?;
             Zip::from(u)
-                .and(&old)
+                .and(old)
                 .par_for_each(|y, &u0| *y = 2.0 * *y - u0);
             Ok(stats)
         }

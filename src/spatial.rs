@@ -76,6 +76,15 @@ pub fn resize<T: Clone>(data: &mut Vec<T>, keep: &[bool], added: usize, value: T
     data.extend(std::iter::repeat_n(value, added));
 }
 
+/// The smallest box (lower and upper corner) holding every point; for no points the lower
+/// corner is +infinity and the upper -infinity, so every test against it fails.
+pub fn bounding_box(points: &[Vec3]) -> (Vec3, Vec3) {
+    let far = Vec3::repeat(Real::INFINITY);
+    points
+        .iter()
+        .fold((far, -far), |(lo, hi), x| (lo.inf(x), hi.sup(x)))
+}
+
 /// One non-empty cell: its coordinates and the range of sorted points inside it.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Cell {
@@ -241,12 +250,7 @@ impl PointHash {
         let original = cell_order(points, cell);
         let sorted: Vec<Vec3> = original.iter().map(|&i| points[i as usize]).collect();
         let grid = CellGrid::build(&sorted, cell);
-        let lo = sorted
-            .iter()
-            .fold(Vec3::repeat(Real::INFINITY), |m, x| m.inf(x));
-        let hi = sorted
-            .iter()
-            .fold(Vec3::repeat(Real::NEG_INFINITY), |m, x| m.sup(x));
+        let (lo, hi) = bounding_box(&sorted);
         Self {
             sorted,
             original,

@@ -1,7 +1,8 @@
 //! The benchmark tables behind `eddy bench` and `eddy bench-grid`: SPH step times on the
 //! dam break ([`sph`]) and each phase of it against its data-movement floor ([`floors`]), the
-//! refinements' overheads against plain DFSPH ([`refine`]), and the MAC grid's plume step times and Taylor–Green error against run time ([`grid`]), and what
-//! the exchange of a coupled grid + SPH scene costs ([`coupling`]).
+//! refinements' overheads against plain DFSPH ([`refine`]), the MAC grid's plume step times
+//! and Taylor–Green error against run time ([`grid`]), and what the exchange of a coupled
+//! grid + SPH scene costs ([`coupling`]).
 
 pub mod abl;
 pub mod coupling;

@@ -440,8 +440,8 @@ impl Figure for ErrorFigure<'_> {
 /// Curves of a parameter study, `y` against `x` (log-log, or linear axes with `log = false`),
 /// one per group with a marker at each run (markers alone with `lines = false`: a stability
 /// map of two varied keys, grouped by status), into the PNG or SVG `out` (written under a
-/// temporary name and renamed). Points that a log axis cannot show (zero, negative, not finite) are left
-/// out and counted in the result.
+/// temporary name and renamed). Points that a log axis cannot show (zero, negative, not
+/// finite) are left out and counted in the result.
 pub fn study_figure(
     out: &Path,
     labels: (&str, &str),

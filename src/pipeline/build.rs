@@ -310,7 +310,7 @@ impl Pipeline {
                 file: Kind::Grid.file("metrics.csv", both),
                 csv: None,
                 taylor_green,
-                coupled: scene.coupling.is_some() && has_sph,
+                coupled,
             }));
         }
         let profiles = probes

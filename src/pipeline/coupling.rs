@@ -39,6 +39,7 @@ use super::stages::{Stage, StepRecord};
 use crate::grid::mac::cell_beside;
 use crate::grid::{GridSolver, Liquid, MacGrid};
 use crate::scene::Coupling;
+use crate::spatial::bounding_box;
 use crate::sph::vortex_coupling::SphVelocity;
 use crate::sph::SphSolver;
 use crate::{Real, Vec3};
@@ -210,13 +211,7 @@ impl Occupancy {
         let mut cells = Array3::from_elem(mac.dims, (0.0, Vec3::zeros()));
         let mut sampled = [0..0, 0..0, 0..0];
         let reach = sph.kernel.support();
-        let (lo, hi) = sph.fluid.x.iter().fold(
-            (
-                Vec3::repeat(Real::INFINITY),
-                Vec3::repeat(Real::NEG_INFINITY),
-            ),
-            |(lo, hi), x| (lo.inf(x), hi.sup(x)),
-        );
+        let (lo, hi) = bounding_box(&sph.fluid.x);
         if lo.x <= hi.x {
             let range = |a: usize| {
                 let cell = |x: Real| ((x - mac.origin[a]) / mac.dx).clamp(0.0, mac.dims[a] as Real);

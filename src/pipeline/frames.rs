@@ -309,11 +309,12 @@ impl VortexFrames {
 /// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
-    const FIXED: [&str; 6] = [
-        "scene.toml",
-        "average.vti",
-        "particles.pvd",
-        "grid.pvd",
+    const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
+    // Written once per medium in a scene with both, as `particles_NAME` and `grid_NAME`.
+    const PER_MEDIUM: [&str; 5] = [
+        "metrics.csv",
+        "probes.csv",
+        "frames.h5",
         "vortices.pvd",
         "vortices.h5",
     ];
@@ -330,12 +331,10 @@ pub fn is_run_output(name: &str) -> bool {
         .or_else(|| name.strip_prefix("grid_"))
         .unwrap_or(name);
     FIXED.contains(&name)
-        || FIXED[4..].contains(&unprefixed)
+        || PER_MEDIUM.contains(&unprefixed)
         || numbered(unprefixed, "vortices_", ".vtp")
-        || ["metrics.csv", "probes.csv", "frames.h5"].contains(&unprefixed)
         || numbered(name, "particles_", ".vtp")
         || numbered(name, "grid_", ".vti")
-        || numbered(name, "vortices_", ".vtp")
         || numbered(name, "vortices_", ".h5")
         || numbered(unprefixed, "frames_", ".h5")
         || (name.starts_with("profile_") && name.ends_with(".csv"))

@@ -72,8 +72,7 @@ impl NeighborLists {
                         for &(s, e) in &ranges {
                             for j in s..e {
                                 found[n] = j;
-                                let d = xi - targets[j as usize];
-                                let near = d.x * d.x + d.y * d.y + d.z * d.z < r2;
+                                let near = (xi - targets[j as usize]).norm_squared() < r2;
                                 n += usize::from(near & (i != j || !exclude_self));
                             }
                         }

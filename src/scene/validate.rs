@@ -172,6 +172,22 @@ impl Scene {
         c.num("viscosity.kinematic", v.kinematic, Interval::ge(0.0))?;
         c.num("viscosity.boundary", v.boundary, Interval::ge(0.0))?;
         c.num("viscosity.xsph", v.xsph, Interval::closed(0.0, 1.0))?;
+        let spacing = self.fluid.as_ref().map(|f| f.spacing).filter(|s| *s > 0.0);
+        let limit = spacing.and_then(|s| crate::sph::forces::viscous_step_limit(s, v));
+        if let Some(limit) = limit.filter(|l| *l < self.time.dt_min) {
+            return Err(c.invalid(
+                "viscosity.kinematic",
+                v.kinematic,
+                format!(
+                    "a stable step of at least `time.dt_min` = {} s: explicit viscosity at \
+                     fluid.spacing {} needs dt <= {} spacing^2 / (kinematic + boundary) = \
+                     {limit:.3e} s",
+                    self.time.dt_min,
+                    spacing.unwrap_or_default(),
+                    crate::sph::forces::VISCOUS_STEP
+                ),
+            ));
+        }
         Ok(())
     }
 

@@ -282,16 +282,16 @@ impl SphSolver {
             None => self.non_pressure_accelerations(),
         };
         let limits = &self.params.limits;
-        let dt =
-            step_size(limits, self.spacing, &self.fluid.v, &accel).map_err(|(needed, speed)| {
-                Instability::CflLimit {
-                    time: self.time,
-                    step: self.step,
-                    needed,
-                    dt_min: limits.dt_min,
-                    speed,
-                }
-            })?;
+        let viscous = forces::viscous_step_limit(self.spacing, &self.params.viscosity);
+        let dt = step_size(limits, viscous, self.spacing, &self.fluid.v, &accel).map_err(
+            |(needed, speed)| Instability::CflLimit {
+                time: self.time,
+                step: self.step,
+                needed,
+                dt_min: limits.dt_min,
+                speed,
+            },
+        )?;
         self.pending_accel = Some(accel);
         Ok(dt)
     }
@@ -486,8 +486,11 @@ impl SphSolver {
         let mut forces = format!("gravity {:?}", p.gravity.as_slice());
         if v.kinematic > 0.0 || v.boundary > 0.0 {
             forces += &format!(
-                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {}",
-                v.kinematic, v.boundary
+                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {} (explicit: \
+                 steps of at most {:.3e} s)",
+                v.kinematic,
+                v.boundary,
+                forces::viscous_step_limit(self.spacing, v).unwrap_or(Real::INFINITY)
             );
         }
         if v.xsph > 0.0 {
@@ -634,10 +637,13 @@ impl SphSolver {
     }
 }
 
-/// The CFL step size (Bender & Koschier: dt = cfl * spacing / max |v + a dt_max|), or the
-/// fixed step. Err gives the step the CFL rule needs and the speed, when below `dt_min`.
+/// The CFL step size (Bender & Koschier: dt = cfl * spacing / max |v + a dt_max|), capped by
+/// `dt_max` and the explicit viscosity's bound `viscous` ([`forces::viscous_step_limit`]; the
+/// scene refuses a `dt_min` above it), or the fixed step. Err gives the step the CFL rule needs
+/// and the speed, when below `dt_min`.
 fn step_size(
     s: &StepLimits,
+    viscous: Option<Real>,
     spacing: Real,
     v: &[Vec3],
     accel: &[Vec3],
@@ -645,20 +651,21 @@ fn step_size(
     if let Some(dt) = s.fixed_dt {
         return Ok(dt);
     }
+    let dt_max = viscous.map_or(s.dt_max, |limit| limit.min(s.dt_max));
     let speed = v
         .par_iter()
         .zip(accel.par_iter())
-        .map(|(v, a)| (v + a * s.dt_max).norm())
+        .map(|(v, a)| (v + a * dt_max).norm())
         .reduce(|| 0.0, Real::max);
     let needed = if speed > 0.0 {
         s.cfl * spacing / speed
     } else {
-        s.dt_max
+        dt_max
     };
     if needed < s.dt_min {
         return Err((needed, speed));
     }
-    Ok(needed.min(s.dt_max))
+    Ok(needed.min(dt_max))
 }
 
 /// Gravity plus viscosity, per fluid particle.

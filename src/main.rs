@@ -67,9 +67,20 @@ enum Command {
         /// Run output folders (each with a metrics.csv).
         #[arg(required = true)]
         runs: Vec<PathBuf>,
-        /// The PNG to write.
+        /// The PNG (or SVG) to write.
         #[arg(long)]
         out: PathBuf,
+        /// Legend labels, one per run in order (default: each run folder's name).
+        #[arg(long, value_delimiter = ',', value_name = "A,B,...")]
+        label: Vec<String>,
+        /// One panel of this column against time instead of the energy panels:
+        /// metrics:COLUMN or probes:COLUMN, e.g. probes:front.
+        #[arg(long, value_name = "FILE:COLUMN")]
+        column: Option<String>,
+        /// A table of published values (CSV with `time` and the column; `#` starts a comment
+        /// line) drawn as markers, e.g. scenes/reference/martin_moyce_1952.csv.
+        #[arg(long, value_name = "FILE", requires = "column")]
+        reference_csv: Option<PathBuf>,
     },
     /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
     Lookup(cli::abl::LookupArgs),
@@ -145,12 +156,54 @@ fn run(command: Command) -> anyhow::Result<()> {
             let bench = eddy::bench::coupling::run(&args.scene.clone(), &args.into())?;
             print!("{}", eddy::bench::coupling::table(&bench));
         }
-        Command::Compare { runs, out } => {
-            let series = runs
+        Command::Compare {
+            runs,
+            out,
+            label,
+            column,
+            reference_csv,
+        } => {
+            use eddy::io::plot::RunSeries;
+            if !label.is_empty() && label.len() != runs.len() {
+                anyhow::bail!(
+                    "--label gives {} labels for {} runs",
+                    label.len(),
+                    runs.len()
+                );
+            }
+            let (file, column) = match column.as_deref().map(|c| c.split_once(':')) {
+                None => ("metrics", None),
+                Some(Some((file @ ("metrics" | "probes"), name))) => (file, Some(name)),
+                Some(_) => anyhow::bail!(
+                    "--column {}: expected metrics:COLUMN or probes:COLUMN",
+                    column.unwrap_or_default()
+                ),
+            };
+            let mut series = runs
                 .iter()
-                .map(|d| eddy::io::plot::RunSeries::read(d))
+                .map(|d| RunSeries::read_file(d, &format!("{file}.csv")))
                 .collect::<Result<Vec<_>, _>>()?;
-            let skipped = eddy::io::plot::compare(&series, &out)?;
+            for (s, l) in series.iter_mut().zip(label) {
+                s.label = l;
+            }
+            let skipped = match column {
+                None => eddy::io::plot::compare(&series, &out)?,
+                Some(name) => {
+                    if let Some(missing) = series.iter().find(|s| s.column(name).is_none()) {
+                        anyhow::bail!("run {} has no {file} column `{name}`", missing.label);
+                    }
+                    let table = reference_csv.map(|p| RunSeries::read_csv(&p)).transpose()?;
+                    let lacks =
+                        |t: &&RunSeries| t.column("time").is_none() || t.column(name).is_none();
+                    if let Some(t) = table.as_ref().filter(lacks) {
+                        anyhow::bail!(
+                            "--reference-csv {}: no `time` and `{name}` columns",
+                            t.label
+                        );
+                    }
+                    eddy::io::plot::compare_column(&series, name, table.as_ref(), &out)?
+                }
+            };
             if skipped > 0 {
                 eprintln!(
                     "eddy: warning: left out {skipped} points whose time or value is not finite"

@@ -66,11 +66,12 @@ pub struct SweepArgs {
     /// the distance s along it), repeatable.
     #[arg(long, value_name = "FILE:COLUMN", requires = "reference")]
     pub compare: Vec<String>,
-    /// A table of published values (CSV with a `time` column) to compare --column with.
+    /// A table of published values (CSV with a `time` column; `#` starts a comment line) to
+    /// compare --column with, e.g. scenes/reference/martin_moyce_1952.csv.
     #[arg(long, value_name = "FILE", requires = "column")]
     pub reference_csv: Option<PathBuf>,
     /// The column of --reference-csv, compared with the run's metrics or probes column of
-    /// that name.
+    /// that name (sweep.csv column error_<NAME>_<table file stem>).
     #[arg(long, value_name = "NAME", requires = "reference_csv")]
     pub column: Option<String>,
     /// Stability study: run each point long (up to --stress-steps steps, or the scene's end if
@@ -284,11 +285,13 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
                 path.display()
             )
         })?;
+        // Named after the table too, so it cannot clash with --compare's error of the column.
+        let table = path.file_stem().unwrap_or_default().to_string_lossy();
         out.push(Measure::Series {
             file: None,
             along: "time",
             column: column.clone(),
-            name: column.clone(),
+            name: format!("{column}_{table}"),
             reference,
         });
     }
@@ -296,9 +299,13 @@ fn measures(args: &SweepArgs) -> anyhow::Result<Vec<Measure>> {
 }
 
 /// (`along`, value) of `column` of a CSV with an `along` column (time, or s of a profile);
-/// None when either is missing.
+/// None when either is missing. Lines starting with `#` are comments (a published table's
+/// source, as in `scenes/reference/`).
 pub(super) fn series(path: &Path, along: &str, column: &str) -> Option<Vec<(f64, f64)>> {
-    let mut reader = csv::Reader::from_path(path).ok()?;
+    let mut reader = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .from_path(path)
+        .ok()?;
     let header = reader.headers().ok()?.clone();
     let t = header.iter().position(|h| h == along)?;
     let c = header.iter().position(|h| h == column)?;

@@ -17,7 +17,7 @@ use plotters::style::{register_font, FontStyle};
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
-/// The columns of one run's `metrics.csv`.
+/// The columns of one run's `metrics.csv` (or another CSV of numbers with a `time` column).
 #[derive(Debug, Clone)]
 pub struct RunSeries {
     /// Legend label (the run folder's name).
@@ -29,9 +29,25 @@ pub struct RunSeries {
 impl RunSeries {
     /// Reads `DIR/metrics.csv`.
     pub fn read(dir: &Path) -> Result<Self, IoError> {
-        let path = dir.join("metrics.csv");
+        Self::read_file(dir, "metrics.csv")
+    }
+
+    /// Reads the run's `DIR/FILE` (e.g. `probes.csv`), labelled by the folder's name.
+    pub fn read_file(dir: &Path, file: &str) -> Result<Self, IoError> {
+        let mut series = Self::read_csv(&dir.join(file))?;
+        series.label = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| dir.display().to_string());
+        Ok(series)
+    }
+
+    /// Reads the CSV `path`, labelled by its file stem; lines starting with `#` are comments
+    /// (a published table's source, as in `scenes/reference/`).
+    pub fn read_csv(path: &Path) -> Result<Self, IoError> {
+        let path = path.to_path_buf();
         let text = std::fs::read_to_string(&path).map_err(|e| IoError::io(&path, "reading", e))?;
-        let mut lines = text.lines();
+        let mut lines = text.lines().filter(|l| !l.starts_with('#'));
         let header: Vec<String> = lines
             .next()
             .ok_or_else(|| IoError::invalid(&path, "empty file, no header"))?
@@ -48,10 +64,10 @@ impl RunSeries {
                     .map_err(|e| IoError::invalid(&path, format!("line {}: {e}", n + 2)))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let label = dir
-            .file_name()
+        let label = path
+            .file_stem()
             .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| dir.display().to_string());
+            .unwrap_or_else(|| path.display().to_string());
         Ok(Self {
             label,
             header,
@@ -68,9 +84,12 @@ impl RunSeries {
     /// A quantity against time: the sum of the named columns (those present), None when the
     /// run has no time column or none of them. Points whose time or value is not finite are
     /// left out; the second value counts them.
-    fn curve(&self, columns: &[&str]) -> Option<(Vec<(Real, Real)>, usize)> {
+    fn curve<C: AsRef<str>>(&self, columns: &[C]) -> Option<(Vec<(Real, Real)>, usize)> {
         let time = self.column("time")?;
-        let parts: Vec<Vec<Real>> = columns.iter().filter_map(|c| self.column(c)).collect();
+        let parts: Vec<Vec<Real>> = columns
+            .iter()
+            .filter_map(|c| self.column(c.as_ref()))
+            .collect();
         if parts.is_empty() {
             return None;
         }
@@ -118,37 +137,73 @@ fn register_bundled_font() {
 /// a temporary name and renamed when complete). Returns how many points were left out for a
 /// time or value that is not finite; the axes span the finite ones.
 pub fn compare(runs: &[RunSeries], out: &Path) -> Result<usize, IoError> {
-    if runs.is_empty() {
-        return Err(IoError::invalid(out, "no runs to compare"));
-    }
-    let panels: Vec<_> = PANELS
+    let panels: Vec<(&str, &[&str])> = PANELS
         .iter()
+        .copied()
         .filter(|(_, columns)| runs.iter().any(|r| r.curve(columns).is_some()))
         .collect();
     let panels = if panels.is_empty() {
-        vec![&PANELS[0]]
+        vec![PANELS[0]]
     } else {
         panels
     };
-    let height = 400 * panels.len() as u32;
-    write_figure(out, (1200, height), Compare { runs, panels })
+    draw_compare(runs, &panels, None, out)
 }
 
-/// The figure of [`compare`].
+/// Draws one column against time for `runs` (e.g. a front probe of their `probes.csv`), with
+/// the rows of a published `table` as markers when given (e.g. Martin & Moyce's surge front);
+/// otherwise as [`compare`].
+pub fn compare_column(
+    runs: &[RunSeries],
+    column: &str,
+    table: Option<&RunSeries>,
+    out: &Path,
+) -> Result<usize, IoError> {
+    draw_compare(runs, &[(column, &[column])], table, out)
+}
+
+fn draw_compare(
+    runs: &[RunSeries],
+    panels: &[(&str, &[&str])],
+    table: Option<&RunSeries>,
+    out: &Path,
+) -> Result<usize, IoError> {
+    if runs.is_empty() {
+        return Err(IoError::invalid(out, "no runs to compare"));
+    }
+    let height = 400 * panels.len() as u32;
+    write_figure(
+        out,
+        (1200, height),
+        Compare {
+            runs,
+            panels,
+            table,
+        },
+    )
+}
+
+/// The figure of [`compare`] and [`compare_column`]: a panel per (title, summed columns), a
+/// line per run, the table's points as markers.
 struct Compare<'a> {
     runs: &'a [RunSeries],
-    panels: Vec<&'a (&'a str, &'a [&'a str])>,
+    panels: &'a [(&'a str, &'a [&'a str])],
+    table: Option<&'a RunSeries>,
 }
 
 impl Figure for Compare<'_> {
     type Output = usize;
 
     fn draw<DB: DrawingBackend>(self, root: &Canvas<DB>, out: &Path) -> Result<usize, IoError> {
-        let Self { runs, panels } = self;
+        let Self {
+            runs,
+            panels,
+            table,
+        } = self;
         let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
         let areas = root.split_evenly((panels.len(), 1));
         let mut skipped = 0;
-        for (area, &&(title, columns)) in areas.iter().zip(&panels) {
+        for (area, &(title, columns)) in areas.iter().zip(panels) {
             let curves: Vec<(usize, Vec<(Real, Real)>)> = runs
                 .iter()
                 .enumerate()
@@ -158,7 +213,11 @@ impl Figure for Compare<'_> {
                     (k, c)
                 })
                 .collect();
-            let points = || curves.iter().flat_map(|(_, c)| c.iter());
+            let marks = table
+                .and_then(|t| t.curve(columns))
+                .map(|(c, _)| c)
+                .unwrap_or_default();
+            let points = || curves.iter().flat_map(|(_, c)| c.iter()).chain(&marks);
             let (t0, t1) =
                 points().fold((Real::MAX, Real::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
             let (y0, y1) =
@@ -191,10 +250,23 @@ impl Figure for Compare<'_> {
                 .label_style(("sans-serif", 14))
                 .draw()
                 .map_err(|e| fail(&e))?;
-            for (k, curve) in curves {
-                line(&mut chart, k, &runs[k].label, curve).map_err(|e| fail(&e))?;
+            for (k, curve) in &curves {
+                line(&mut chart, *k, &runs[*k].label, curve.iter().copied())
+                    .map_err(|e| fail(&e))?;
             }
-            legend(&mut chart).map_err(|e| fail(&e))?;
+            if let (Some(table), false) = (table, marks.is_empty()) {
+                chart
+                    .draw_series(
+                        marks
+                            .iter()
+                            .map(|&p| Circle::new(p, 5, BLACK.stroke_width(2))),
+                    )
+                    .map_err(|e| fail(&e))?
+                    .label(&table.label)
+                    .legend(|(x, y)| Circle::new((x + 10, y), 5, BLACK.stroke_width(2)));
+            }
+            let data = curves.iter().flat_map(|(_, c)| c.iter()).chain(&marks);
+            legend(&mut chart, data.copied()).map_err(|e| fail(&e))?;
         }
         Ok(skipped)
     }
@@ -237,14 +309,52 @@ fn line<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The legend box every panel of eddy's figures draws.
-fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Result<(), String>
+/// The legend box every panel of eddy's figures draws, in the corner of the plot whose
+/// 40 % x 40 % box holds the fewest of the panel's `data` points (upper right on a tie), so it
+/// sits off the data.
+fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    data: impl IntoIterator<Item = CT::From>,
+) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
     CT: plotters::coord::CoordTranslate,
 {
+    let (px, py) = chart.plotting_area().get_pixel_range();
+    let fraction =
+        |v: i32, r: &std::ops::Range<i32>| (v - r.start) as Real / (r.end - r.start).max(1) as Real;
+    // Pixel rows grow downwards: a small y fraction is the top of the plot.
+    let mut count = [0usize; 4];
+    for p in data {
+        let (x, y) = chart.as_coord_spec().translate(&p);
+        let (fx, fy) = (fraction(x, &px), fraction(y, &py));
+        let column = if fx < 0.4 {
+            Some(0)
+        } else {
+            (fx > 0.6).then_some(1)
+        };
+        let row = if fy < 0.4 {
+            Some(0)
+        } else {
+            (fy > 0.6).then_some(2)
+        };
+        if let (Some(c), Some(r)) = (column, row) {
+            count[r + c] += 1;
+        }
+    }
+    use SeriesLabelPosition::{LowerLeft, LowerRight, UpperLeft, UpperRight};
+    let corner = [
+        (1, UpperRight),
+        (0, UpperLeft),
+        (3, LowerRight),
+        (2, LowerLeft),
+    ]
+    .into_iter()
+    .min_by_key(|&(k, _)| count[k])
+    .map_or(UpperRight, |(_, c)| c);
     chart
         .configure_series_labels()
+        .position(corner)
         .label_font(("sans-serif", 14))
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
@@ -391,7 +501,7 @@ impl Figure for ErrorFigure<'_> {
                 .label_style(("sans-serif", 14))
                 .draw()
                 .map_err(|e| fail(&e))?;
-            for (k, t, e) in shown {
+            for &(k, t, e) in &shown {
                 let color = Palette99::pick(k).to_rgba();
                 chart
                     .draw_series(std::iter::once(Circle::new((t, e), 6, color.filled())))
@@ -399,7 +509,7 @@ impl Figure for ErrorFigure<'_> {
                     .label(points[k].label.clone())
                     .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
             }
-            legend(&mut chart).map_err(|e| fail(&e))?;
+            legend(&mut chart, shown.iter().map(|&(_, t, e)| (t, e))).map_err(|e| fail(&e))?;
         }
         let CurvePanel {
             title,
@@ -432,7 +542,7 @@ impl Figure for ErrorFigure<'_> {
         for (k, (label, curve)) in curves.iter().enumerate() {
             line(&mut chart, k, label, curve.iter().copied()).map_err(|e| fail(&e))?;
         }
-        legend(&mut chart).map_err(|e| fail(&e))?;
+        legend(&mut chart, all().copied()).map_err(|e| fail(&e))?;
         Ok(())
     }
 }
@@ -567,5 +677,5 @@ where
                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
             });
     }
-    legend(chart)
+    legend(chart, curves.iter().flat_map(|(_, c)| c.iter().copied()))
 }

@@ -265,8 +265,7 @@ impl Figure for Compare<'_> {
                     .label(&table.label)
                     .legend(|(x, y)| Circle::new((x + 10, y), 5, BLACK.stroke_width(2)));
             }
-            let data = curves.iter().flat_map(|(_, c)| c.iter()).chain(&marks);
-            legend(&mut chart, data.copied()).map_err(|e| fail(&e))?;
+            legend(&mut chart, points().copied()).map_err(|e| fail(&e))?;
         }
         Ok(skipped)
     }

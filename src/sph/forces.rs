@@ -80,7 +80,7 @@ mod tests {
     use nalgebra::Matrix3;
 
     /// The spectral radius of Eq. 4's operator on the rest lattice, from its Fourier symbol
-    /// M(k) = sum_j B_j (1 - cos(k . x_j)), B_j the pair's 3 x 3 block, over a 13^3 grid of
+    /// M(k) = sum_j B_j (1 - cos(k . x_j)), B_j the pair's 3 x 3 block, over a 7^3 grid of
     /// wave vectors in [0, pi]^3 per spacing: [`VISCOUS_STEP`] lies inside the forward-Euler
     /// bound 2 / rho, by at most 30 %.
     #[test]
@@ -100,11 +100,10 @@ mod tests {
             let b: Matrix3<Real> = -10.0 * volume / (x.norm_squared() + eps) * g * x.transpose();
             blocks.push((x, b));
         }
-        let n = 13;
         let mut rho: Real = 0.0;
-        for (a, b, c) in cube(n / 2) {
-            let k = Vec3::new(a as Real, b as Real, c as Real).abs()
-                * (std::f64::consts::PI / (n / 2) as Real / spacing);
+        for (a, b, c) in cube(6).filter(|&(a, b, c)| a >= 0 && b >= 0 && c >= 0) {
+            let k =
+                Vec3::new(a as Real, b as Real, c as Real) * (std::f64::consts::PI / 6.0 / spacing);
             let m: Matrix3<Real> = blocks.iter().map(|(x, b)| b * (1.0 - k.dot(x).cos())).sum();
             rho = rho.max(m.symmetric_eigen().eigenvalues.max());
         }

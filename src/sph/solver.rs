@@ -484,13 +484,11 @@ impl SphSolver {
         out.extend(self.hooks.iter().map(|h| (h.name(), h.describe())));
         let v = &p.viscosity;
         let mut forces = format!("gravity {:?}", p.gravity.as_slice());
-        if v.kinematic > 0.0 || v.boundary > 0.0 {
+        if let Some(limit) = forces::viscous_step_limit(self.spacing, v) {
             forces += &format!(
                 ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {} (explicit: \
-                 steps of at most {:.3e} s)",
-                v.kinematic,
-                v.boundary,
-                forces::viscous_step_limit(self.spacing, v).unwrap_or(Real::INFINITY)
+                 steps of at most {limit:.3e} s)",
+                v.kinematic, v.boundary
             );
         }
         if v.xsph > 0.0 {

@@ -363,13 +363,36 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
     for (k, step) in summary.trace.chunks(per_step.len()).enumerate() {
         assert_eq!(step, per_step.as_slice(), "step {k}");
     }
-    for f in [
-        "vortices.pvd",
-        "vortices_000000.vtp",
-        "vortices.h5",
-        "grid_000000.vti",
-    ] {
+    for f in ["vortices.pvd", "vortices_000000.vtp", "grid_000000.vti"] {
         assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // Each grid frame in frames.h5 holds the vortex particles of its time, the same set as the
+    // VTK series' file of that frame.
+    {
+        let _serial = common::hdf5_or_child();
+        let h5 = hdf5::File::open(out.join("frames.h5")).expect("frames.h5 opens");
+        let listed = h5.group("frames").and_then(|g| g.member_names());
+        let listed = listed.expect("frames.h5 lists its frames");
+        let mut seeded = 0;
+        for (k, name) in listed.iter().enumerate() {
+            let vtp =
+                std::fs::read_to_string(out.join(format!("vortices_{k:06}.vtp"))).expect("vtp");
+            let points = vtp
+                .split("NumberOfPoints=\"")
+                .nth(1)
+                .and_then(|r| r.split('"').next());
+            let n: usize = points.and_then(|n| n.parse().ok()).expect("NumberOfPoints");
+            let set = h5
+                .group(&format!("frames/{name}/vortices"))
+                .expect("vortices group");
+            assert_eq!(set.dataset("position").expect("position").shape(), [n, 3]);
+            assert_eq!(set.dataset("vorticity").expect("vorticity").shape(), [n, 3]);
+            for field in ["radius", "energy", "age"] {
+                assert_eq!(set.dataset(field).expect(field).shape(), [n], "{field}");
+            }
+            seeded = seeded.max(n);
+        }
+        assert!(listed.len() > 2 && seeded > 0, "{} frames", listed.len());
     }
     let vti = std::fs::read_to_string(out.join("grid_000001.vti")).expect("frame");
     assert!(vti.contains("abl_vorticity"));

@@ -477,6 +477,62 @@ fn hdf5_index_is_rewritten_whole() {
     assert_eq!(out.len(), 5, "a failed append must not advance the index");
 }
 
+/// A particle set appended with a frame (the vortex particles beside the fluid) reads back as
+/// its own group under the frame; a set named like a field, or twice, or holding a bad field,
+/// is refused and the index does not advance.
+#[test]
+fn hdf5_particle_sets_ride_in_their_frame() {
+    let _serial = common::hdf5_or_child();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("frames.h5");
+    let mut out = Hdf5Frames::create(&path, &[]).unwrap();
+    let (fluid, vortices) = (positions(4, 0.0), positions(2, 7.0));
+    let density = [1000.0, 1001.0, 999.0, 1000.5];
+    let radius = [AWKWARD[1], AWKWARD[2]];
+    let frame = |fields| ParticleFrame {
+        step: 3,
+        time: 0.25,
+        positions: &fluid,
+        fields,
+    };
+    let set = |name, values: &'static [Real]| ParticleFrame {
+        step: 3,
+        time: 0.25,
+        positions: &vortices,
+        fields: vec![Field::scalar(name, values)],
+    };
+    let (good, short) = (set("radius", &[0.0; 2]), set("radius", &[0.0; 1]));
+    let main = frame(vec![Field::scalar("density", &density)]);
+    for bad in [
+        vec![("density", &good)],
+        vec![("vortices", &good), ("vortices", &good)],
+        vec![("a/b", &good)],
+        vec![("vortices", &short)],
+    ] {
+        let err = out.append_with(&main, &bad).unwrap_err();
+        assert!(matches!(err, IoError::Invalid { .. }), "{err:?}");
+    }
+    assert_eq!(out.len(), 0);
+    let sets = ParticleFrame {
+        fields: vec![Field::scalar("radius", &radius)],
+        ..set("radius", &[0.0; 2])
+    };
+    out.append_with(&main, &[("vortices", &sets)]).unwrap();
+    let file = hdf5::File::open(&path).unwrap();
+    let g = file.group("frames/000000/vortices").unwrap();
+    assert_eq!(g.dataset("position").unwrap().shape(), vec![2, 3]);
+    assert_eq!(
+        g.dataset("position").unwrap().read_raw::<f64>().unwrap(),
+        flat(&vortices)
+    );
+    assert_eq!(
+        g.dataset("radius").unwrap().read_raw::<f64>().unwrap(),
+        radius
+    );
+    let d = file.dataset("frames/000000/density").unwrap();
+    assert_eq!(d.read_raw::<f64>().unwrap(), density);
+}
+
 #[test]
 fn hdf5_rejects_bad_frames_and_attributes() {
     let _serial = common::hdf5_or_child();

@@ -876,7 +876,7 @@ fn stability(axes: &[Axis], rows: &[Row]) -> Vec<Vec<String>> {
     out
 }
 
-/// The step and time of the last row of a run's metrics.csv.
+/// The steps a run took and the time it ended at, from its metrics.csv.
 fn last_metrics(path: &Path) -> (Option<u64>, Option<f64>) {
     let Ok(mut reader) = csv::Reader::from_path(path) else {
         return (None, None);
@@ -885,15 +885,20 @@ fn last_metrics(path: &Path) -> (Option<u64>, Option<f64>) {
         return (None, None);
     };
     let col = |name: &str| header.iter().position(|h| h == name);
-    let (Some(step), Some(time)) = (col("step"), col("time")) else {
+    let (Some(step), Some(time), Some(dt)) = (col("step"), col("time"), col("dt")) else {
         return (None, None);
     };
     let Some(last) = reader.records().filter_map(Result::ok).last() else {
         return (None, None);
     };
+    let value = |c: usize| last.get(c).and_then(|v| v.parse::<f64>().ok());
+    // A row records the step that starts at `time` (step 0 at t = 0): the run has taken one
+    // step more than the last row's index and ended at its time plus its dt.
     (
-        last.get(step).and_then(|s| s.parse().ok()),
-        last.get(time).and_then(|t| t.parse().ok()),
+        last.get(step)
+            .and_then(|s| s.parse::<u64>().ok())
+            .map(|s| s + 1),
+        value(time).zip(value(dt)).map(|(t, dt)| t + dt),
     )
 }
 

@@ -5,6 +5,8 @@
 //! /frames/000000         group, attributes `time` (f64) and `step` (u64)
 //! /frames/000000/position  N x 3 f64
 //! /frames/000000/<field>   N f64 (scalar) or N x 3 f64 (vector)
+//! /frames/000000/<set>/    a particle set of the same time laid out as a frame (e.g. the
+//!                          vortex particles, `vortices`), when appended with one
 //! ```
 //!
 //! **Crash safety.** Each frame is its own file `STEM_NNNNNN.h5` beside the index `STEM.h5`,
@@ -83,23 +85,26 @@ impl Hdf5Frames {
     /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
     /// complete, so a failed append can be retried.
     pub fn append(&mut self, frame: &ParticleFrame) -> Result<(), IoError> {
+        self.append_with(frame, &[])
+    }
+
+    /// Appends one frame with other particle sets of the same time, each `(name, set)` as a
+    /// subgroup `/frames/NNNNNN/name` laid out as a frame.
+    pub fn append_with(
+        &mut self,
+        frame: &ParticleFrame,
+        sets: &[(&str, &ParticleFrame)],
+    ) -> Result<(), IoError> {
         frame.validate(&self.index.path, "position")?;
+        let names: Vec<&str> = frame.fields.iter().map(|f| f.name).collect();
+        validate_sets(&self.index.path, &names, sets)?;
         self.index.append(
             frame.step,
             frame.time,
             |_| Ok(()),
             |group| {
-                let n = frame.positions.len();
-                write_dataset(group, "position", &flatten(frame.positions), n, 3)?;
-                for field in &frame.fields {
-                    match field.data {
-                        FieldData::Scalar(v) => write_dataset(group, field.name, v, n, 1)?,
-                        FieldData::Vector(v) => {
-                            write_dataset(group, field.name, &flatten(v), n, 3)?
-                        }
-                    }
-                }
-                Ok(())
+                write_particles(group, frame)?;
+                write_sets(group, sets)
             },
         )
     }
@@ -295,6 +300,50 @@ pub(super) fn write_scalar_attr<T: hdf5::H5Type>(
     let what = || format!("writing attribute {name:?}");
     let attr = ctx(loc.new_attr::<T>().shape(()).create(name), what)?;
     ctx(attr.as_writer().write_scalar(v), what)
+}
+
+/// Checks particle sets to be written beside a frame whose datasets are named `taken`: each
+/// set a valid frame, its name a valid group name that no dataset or other set has.
+pub(super) fn validate_sets(
+    path: &Path,
+    taken: &[&str],
+    sets: &[(&str, &ParticleFrame)],
+) -> Result<(), IoError> {
+    for (i, (name, set)) in sets.iter().enumerate() {
+        let bad = name.is_empty() || name.contains('/') || name.chars().any(char::is_control);
+        if bad || taken.contains(name) || sets[..i].iter().any(|(n, _)| n == name) {
+            return Err(IoError::invalid(
+                path,
+                format!("particle set name {name:?} is empty, repeated or holds '/'"),
+            ));
+        }
+        set.validate(path, "position")?;
+    }
+    Ok(())
+}
+
+/// Writes each `(name, set)` as a subgroup of `group` laid out as a particle frame.
+pub(super) fn write_sets(group: &Group, sets: &[(&str, &ParticleFrame)]) -> Result<(), Failure> {
+    for (name, set) in sets {
+        let sub = ctx(group.create_group(name), || {
+            format!("creating group {name:?}")
+        })?;
+        write_particles(&sub, set)?;
+    }
+    Ok(())
+}
+
+/// Writes a particle frame's positions and fields as datasets of `group`.
+fn write_particles(group: &Group, frame: &ParticleFrame) -> Result<(), Failure> {
+    let n = frame.positions.len();
+    write_dataset(group, "position", &flatten(frame.positions), n, 3)?;
+    for field in &frame.fields {
+        match field.data {
+            FieldData::Scalar(v) => write_dataset(group, field.name, v, n, 1)?,
+            FieldData::Vector(v) => write_dataset(group, field.name, &flatten(v), n, 3)?,
+        }
+    }
+    Ok(())
 }
 
 fn write_dataset(

@@ -9,6 +9,8 @@
 //! /frames/000000            group, attributes `time` (f64) and `step` (u64)
 //! /frames/000000/<field>    nx x ny x nz f64 (scalar) or nx x ny x nz x 3 f64 (vector),
 //!                           C order, indexed [i, j, k] = [x, y, z] as in the solver
+//! /frames/000000/<set>/     a particle set of the same time laid out as a particle frame
+//!                           (the vortex particles, `vortices`), when appended with one
 //! ```
 //!
 //! Cell `(i, j, k)` spans `origin + spacing * [i, i + 1] x [j, j + 1] x [k, k + 1]`, so in h5py
@@ -19,8 +21,8 @@ use std::path::Path;
 
 use hdf5::Group;
 
-use super::hdf5_frames::{ctx, write_scalar_attr, Failure, FrameIndex};
-use super::{AttrValue, GridFieldData, GridFrame, IoError};
+use super::hdf5_frames::{ctx, validate_sets, write_scalar_attr, write_sets, Failure, FrameIndex};
+use super::{AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
 use crate::{Real, Vec3};
 
 /// Value of the root attribute `format`, so readers can tell grid files from particle files.
@@ -88,7 +90,19 @@ impl Hdf5GridFrames {
     /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
     /// complete, so a failed append can be retried.
     pub fn append(&mut self, frame: &GridFrame) -> Result<(), IoError> {
+        self.append_with(frame, &[])
+    }
+
+    /// Appends one frame with particle sets of the same time, each `(name, set)` as a subgroup
+    /// `/frames/NNNNNN/name` laid out as a particle frame.
+    pub fn append_with(
+        &mut self,
+        frame: &GridFrame,
+        sets: &[(&str, &ParticleFrame)],
+    ) -> Result<(), IoError> {
         frame.validate(&self.index.path)?;
+        let names: Vec<&str> = frame.fields.iter().map(|f| f.name).collect();
+        validate_sets(&self.index.path, &names, sets)?;
         let geometry = Geometry::of(frame);
         if let Some(fixed) = self.geometry {
             if fixed != geometry {
@@ -111,7 +125,10 @@ impl Hdf5GridFrames {
             frame.step,
             frame.time,
             |root| write_geometry(root, &geometry),
-            |group| write_fields(group, frame),
+            |group| {
+                write_fields(group, frame)?;
+                write_sets(group, sets)
+            },
         )?;
         self.geometry = Some(geometry);
         Ok(())

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::coupling::{SurfaceExchange, SurfacePressure};
 use super::footprint::{available_memory, Footprint};
-use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames};
+use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames, VortexValues};
 use super::simulation::{Simulation, StepError};
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
@@ -64,18 +64,22 @@ fn vortex_sets(sim: &Simulation) -> [Option<String>; 2] {
 }
 
 impl Frames {
-    /// Writes one frame of every solver.
+    /// Writes one frame of every solver, with each medium's vortex particles.
     pub fn write(&mut self, sim: &Simulation) -> Result<(), IoError> {
+        let values = [&sim.grid_turbulence, &sim.sph_turbulence]
+            .map(|t| t.as_ref().map(|t| VortexValues::of(&t.vortices)));
+        let [grid_set, fluid_set] = values
+            .each_ref()
+            .map(|v| v.as_ref().map(|v| v.frame(sim.steps, sim.time)));
         if let (Some(w), Some(sph)) = (self.particles.as_mut(), sim.sph.as_ref()) {
-            w.write(sph)?;
+            w.write(sph, fluid_set.as_ref())?;
         }
         if let (Some(w), Some(grid)) = (self.grid.as_mut(), sim.grid.as_ref()) {
-            w.write(grid, sim.grid_turbulence.as_ref())?;
+            w.write(grid, sim.grid_turbulence.as_ref(), grid_set.as_ref())?;
         }
-        let sets = [&sim.grid_turbulence, &sim.sph_turbulence];
-        for (w, t) in self.vortices.iter_mut().zip(sets) {
-            if let (Some(w), Some(t)) = (w, t) {
-                w.write(&t.vortices, sim.steps, sim.time)?;
+        for (w, set) in self.vortices.iter_mut().zip([grid_set, fluid_set]) {
+            if let (Some(w), Some(set)) = (w, set) {
+                w.write(&set)?;
             }
         }
         Ok(())
@@ -95,15 +99,16 @@ impl Frames {
             (sim.sph.is_some(), Kind::Particles, "particles"),
             (sim.grid.is_some(), Kind::Grid, "grid"),
         ];
+        let with_vortices = |kind: &Kind| match kind {
+            Kind::Particles => sim.sph_turbulence.is_some(),
+            Kind::Grid => sim.grid_turbulence.is_some(),
+        };
         for name in vortex_sets(sim).into_iter().flatten() {
             if self.vtk {
                 out.push((
                     "vtk",
                     format!("vortex particles + {name}.pvd every {} s", self.interval),
                 ));
-            }
-            if self.hdf5 {
-                out.push(("hdf5", format!("{name}.h5 every {} s", self.interval)));
             }
         }
         for (_, kind, name) in kinds.iter().filter(|k| k.0) {
@@ -117,8 +122,13 @@ impl Frames {
                 out.push((
                     "hdf5",
                     format!(
-                        "{} ({name}) every {} s",
+                        "{} ({name}{}) every {} s",
                         kind.file("frames.h5", self.both),
+                        if with_vortices(kind) {
+                            ", vortex particles in each frame's group `vortices`"
+                        } else {
+                            ""
+                        },
                         self.interval
                     ),
                 ));
@@ -416,7 +426,7 @@ impl Pipeline {
         }
         for (w, name) in f.vortices.iter_mut().zip(vortex_sets(&self.sim)) {
             if let Some(name) = name {
-                *w = Some(VortexFrames::new(out, &name, f.vtk, f.hdf5, &f.attrs)?);
+                *w = Some(VortexFrames::new(out, &name, f.vtk));
             }
         }
         Ok(())

@@ -99,8 +99,13 @@ impl ParticleFrames {
         }))
     }
 
-    /// Position, velocity, density, pressure, the hooks' fields and the carried fields.
-    pub fn write(&mut self, solver: &SphSolver) -> Result<(), IoError> {
+    /// Position, velocity, density, pressure, the hooks' fields and the carried fields, and in
+    /// the HDF5 frame the fluid's vortex particles as the group `vortices`.
+    pub fn write(
+        &mut self,
+        solver: &SphSolver,
+        vortices: Option<&ParticleFrame>,
+    ) -> Result<(), IoError> {
         let w = &mut self.0;
         if !w.any() {
             return Ok(());
@@ -132,7 +137,7 @@ impl ParticleFrames {
             frame.time,
             ("particles", "vtp"),
             write_particles_vtk,
-            |h5, f| h5.append(f),
+            |h5, f| h5.append_with(f, &sets(vortices)),
         )
     }
 
@@ -165,11 +170,13 @@ impl GridFrames {
     }
 
     /// Velocity, vorticity, pressure, smoke, temperature, the obstacle cells and, with
-    /// `turbulence`, the boundary-layer field `abl_vorticity`.
+    /// `turbulence`, the boundary-layer field `abl_vorticity`, and in the HDF5 frame the
+    /// grid's vortex particles as the group `vortices`.
     pub fn write(
         &mut self,
         solver: &GridSolver,
         turbulence: Option<&Turbulence>,
+        vortices: Option<&ParticleFrame>,
     ) -> Result<(), IoError> {
         let w = &mut self.0;
         if !w.any() {
@@ -215,7 +222,7 @@ impl GridFrames {
             frame.time,
             ("grid", "vti"),
             write_grid_vtk,
-            |h5, f| h5.append(f),
+            |h5, f| h5.append_with(f, &sets(vortices)),
         )
     }
 
@@ -248,60 +255,80 @@ impl GridFrames {
     }
 }
 
-/// The vortex-particle writers of a scene with boundary layers: `NAME.pvd` with
-/// `NAME_NNNNNN.vtp`, and `NAME.h5`, NAME `vortices` (`grid_vortices` and
-/// `particles_vortices` in a coupled scene, which has a set in each medium).
-pub struct VortexFrames(Writers<Hdf5Frames>, String);
+/// The HDF5 group of a frame that holds its medium's vortex particles.
+const VORTEX_GROUP: &str = "vortices";
 
-impl VortexFrames {
-    /// Writers into `out` named `name`, with `NAME.h5` when `hdf5`.
-    pub fn new(
-        out: &Path,
-        name: &str,
-        vtk: bool,
-        hdf5: bool,
-        attrs: &[(&str, AttrValue)],
-    ) -> Result<Self, IoError> {
-        let hdf5 = hdf5
-            .then(|| Hdf5Frames::create(&out.join(format!("{name}.h5")), attrs))
-            .transpose()?;
-        Ok(Self(
-            Writers {
-                out: out.to_path_buf(),
-                pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{name}.pvd")))),
-                hdf5,
-                count: 0,
-            },
-            name.to_owned(),
-        ))
+/// The particle sets written into an HDF5 frame beside its own data.
+fn sets<'a>(vortices: Option<&'a ParticleFrame<'a>>) -> Vec<(&'static str, &'a ParticleFrame<'a>)> {
+    vortices.map(|v| (VORTEX_GROUP, v)).into_iter().collect()
+}
+
+/// The per-particle values of a vortex set that it does not store, computed once per frame.
+pub struct VortexValues<'a> {
+    particles: &'a VortexParticles,
+    radius: Vec<Real>,
+    energy: Vec<Real>,
+}
+
+impl<'a> VortexValues<'a> {
+    pub fn of(particles: &'a VortexParticles) -> Self {
+        let n = particles.len();
+        Self {
+            particles,
+            radius: (0..n).map(|i| particles.radius(i)).collect(),
+            energy: (0..n).map(|i| particles.energy(i)).collect(),
+        }
     }
 
     /// Position, vorticity vector (1/s), radius `sqrt(6) sigma` (m), kernel energy (m^5/s^2)
     /// and age (s) of every particle.
-    pub fn write(&mut self, p: &VortexParticles, step: u64, time: Real) -> Result<(), IoError> {
-        let w = &mut self.0;
-        if !w.any() {
-            return Ok(());
-        }
-        let radius: Vec<Real> = (0..p.len()).map(|i| p.radius(i)).collect();
-        let energy: Vec<Real> = (0..p.len()).map(|i| p.energy(i)).collect();
-        let frame = ParticleFrame {
+    pub fn frame(&self, step: u64, time: Real) -> ParticleFrame<'_> {
+        let p = self.particles;
+        ParticleFrame {
             step,
             time,
             positions: &p.x,
             fields: vec![
                 Field::vector("vorticity", &p.omega),
-                Field::scalar("radius", &radius),
-                Field::scalar("energy", &energy),
+                Field::scalar("radius", &self.radius),
+                Field::scalar("energy", &self.energy),
                 Field::scalar("age", &p.age),
             ],
-        };
+        }
+    }
+}
+
+/// The vortex particles of a scene with boundary layers as a VTK series, `NAME.pvd` with
+/// `NAME_NNNNNN.vtp`, NAME `vortices` (`grid_vortices` and `particles_vortices` in a coupled
+/// scene, which has a set in each medium). In HDF5 they are a group of their medium's frames.
+pub struct VortexFrames(Writers<()>, String);
+
+impl VortexFrames {
+    /// The series in `out` named `name`, written when `vtk`.
+    pub fn new(out: &Path, name: &str, vtk: bool) -> Self {
+        Self(
+            Writers {
+                out: out.to_path_buf(),
+                pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{name}.pvd")))),
+                hdf5: None,
+                count: 0,
+            },
+            name.to_owned(),
+        )
+    }
+
+    /// Writes the next file of the series.
+    pub fn write(&mut self, frame: &ParticleFrame) -> Result<(), IoError> {
+        let w = &mut self.0;
+        if !w.any() {
+            return Ok(());
+        }
         w.push(
-            &frame,
-            time,
+            frame,
+            frame.time,
             (&self.1, "vtp"),
             write_particles_vtk,
-            |h5, f| h5.append(f),
+            |(), _| Ok(()),
         )
     }
 }
@@ -311,13 +338,7 @@ impl VortexFrames {
 pub fn is_run_output(name: &str) -> bool {
     const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
     // Written once per medium in a scene with both, as `particles_NAME` and `grid_NAME`.
-    const PER_MEDIUM: [&str; 5] = [
-        "metrics.csv",
-        "probes.csv",
-        "frames.h5",
-        "vortices.pvd",
-        "vortices.h5",
-    ];
+    const PER_MEDIUM: [&str; 4] = ["metrics.csv", "probes.csv", "frames.h5", "vortices.pvd"];
     let six_digits =
         |n: Option<&str>| n.is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()));
     let numbered = |s: &str, prefix: &str, ext: &str| {
@@ -335,7 +356,6 @@ pub fn is_run_output(name: &str) -> bool {
         || numbered(unprefixed, "vortices_", ".vtp")
         || numbered(name, "particles_", ".vtp")
         || numbered(name, "grid_", ".vti")
-        || numbered(name, "vortices_", ".h5")
         || numbered(unprefixed, "frames_", ".h5")
         || (name.starts_with("profile_") && name.ends_with(".csv"))
 }

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use eddy::abl::AblDatabase;
 use eddy::grid::walls::{boundary_cells, wall_distance};
+use eddy::grid::GridSolver;
 use eddy::pipeline::{run, Pipeline, RunOptions};
 use eddy::scene::{parse_str, Scene, Shape};
 use eddy::{Point3, Real, Vec3};
@@ -413,6 +414,72 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
     assert!(plain.sim.grid_turbulence.is_none());
 }
 
+/// With the smoke on the grid twice as fine, a run writes it as its own series
+/// (`smoke_fine.pvd`, `smoke_fine.h5` on the fine grid, h5py-readable) and the flow's frames
+/// hold its cell means: the two files agree frame by frame.
+#[test]
+fn the_fine_smoke_is_written_beside_the_flow_frames() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let file = dir.path().join("abl.toml");
+    let body = text(
+        CENTRE,
+        &common::abl_line(&db),
+        "[turbulence]\nc_p = 1e4\nupsample = 2",
+    )
+    .replace("steps = 8", "steps = 4")
+    .replace("vtk = false", "vtk = true\nhdf5 = true\ninterval = 0.05");
+    std::fs::write(&file, body).expect("writes the scene");
+    let out = dir.path().join("out");
+    let options = RunOptions {
+        out: Some(out.clone()),
+        progress: false,
+        ..RunOptions::default()
+    };
+    let _serial = common::hdf5_or_child();
+    run(&file, &options).expect("runs");
+    for f in ["smoke_fine.pvd", "smoke_fine_000000.vti", "grid_000000.vti"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let flow = hdf5::File::open(out.join("frames.h5")).expect("frames.h5 opens");
+    let fine = hdf5::File::open(out.join("smoke_fine.h5")).expect("smoke_fine.h5 opens");
+    let dims: Vec<u64> = fine.attr("dims").and_then(|a| a.read_raw()).expect("dims");
+    assert_eq!(dims, [64, 32, 32]);
+    let spacing = |f: &hdf5::File| f.attr("spacing").and_then(|a| a.read_scalar::<Real>());
+    assert_eq!(
+        spacing(&fine).expect("spacing") * 2.0,
+        spacing(&flow).expect("spacing")
+    );
+    let names = fine
+        .group("frames")
+        .and_then(|g| g.member_names())
+        .expect("frames");
+    assert!(names.len() > 1, "{names:?}");
+    let mut smoke = 0.0;
+    for name in &names {
+        let read = |f: &hdf5::File| {
+            f.dataset(&format!("frames/{name}/smoke"))
+                .and_then(|d| d.read::<Real, ndarray::Ix3>())
+                .expect("smoke")
+        };
+        let (means, fine) = (read(&flow), read(&fine));
+        assert_eq!(means.dim(), (32, 16, 16));
+        for ((i, j, k), &m) in means.indexed_iter() {
+            let block = fine.slice(ndarray::s![
+                2 * i..2 * i + 2,
+                2 * j..2 * j + 2,
+                2 * k..2 * k + 2
+            ]);
+            assert!(
+                (block.sum() / 8.0 - m).abs() < 1e-12,
+                "frame {name}, cell {i} {j} {k}"
+            );
+        }
+        smoke = fine.sum();
+    }
+    assert!(smoke > 0.0, "the source's smoke reached no frame");
+}
+
 /// A 16^3 box whose lid drags the fluid (viscosity 0.01 m^2/s): twenty steps of it give a
 /// stored flow with structure.
 fn lid_scene(extra: &str) -> String {
@@ -522,8 +589,9 @@ fn a_static_flow_carries_the_smoke_and_is_never_projected() {
     assert!(e.contains("[16, 16, 16]") && e.contains("[8, 8, 8]"), "{e}");
 }
 
-/// `turbulence.upsample = 2` synthesises on a lattice twice as fine (Table 1): the plan says
-/// so, and the same seeds give a different grid velocity than at 1; 3 is refused.
+/// `turbulence.upsample = 2` synthesises on a lattice twice as fine and keeps the smoke there
+/// (Table 1, section 5.2): the plan says so, the smoke has twice the cells along each axis,
+/// and the same seeds give a different grid velocity than at 1; 3 is refused.
 #[test]
 fn synthesis_upsampling_is_wired_through() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -552,10 +620,19 @@ fn synthesis_upsampling_is_wired_through() {
             .clone()
     };
     assert!(line(&two).contains("2x finer"), "{}", line(&two));
+    assert!(line(&two).contains("smoke's fine faces"), "{}", line(&two));
     let (a, b) = (common::turbulence(&one), common::turbulence(&two));
     assert!(!a.vortices.is_empty() && !b.vortices.is_empty());
     let (ga, gb) = (common::grid(&one), common::grid(&two));
     assert!(ga.mac.u[1] != gb.mac.u[1], "upsampling changed nothing");
+    // Section 5.2: the smoke lives on the grid twice as fine, the flow's stays.
+    let smoke = |g: &GridSolver| g.smoke.as_ref().expect("the scene has smoke").density.dim();
+    assert_eq!(smoke(ga), (32, 16, 16));
+    assert_eq!(smoke(gb), (64, 32, 32));
+    assert!(gb
+        .describe()
+        .iter()
+        .any(|(n, d)| *n == "advect" && d.contains("2x finer")));
     let e = scene(&text(
         CENTRE,
         &common::abl_line(&db),

@@ -290,6 +290,7 @@ fn solvers_build_from_parameters_alone() {
         limits: StepLimits::default(),
         pressure: Default::default(),
         smoke: None,
+        smoke_refinement: 1,
         average_from: None,
         container: false,
     };

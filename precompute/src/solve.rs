@@ -84,6 +84,7 @@ pub fn grid(
             max_iterations: PRESSURE_MAX_ITERATIONS,
         },
         smoke: None,
+        smoke_refinement: 1,
         average_from: None,
         container: false,
     };

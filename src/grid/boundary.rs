@@ -386,6 +386,16 @@ impl Boundaries {
     }
 }
 
+/// The cells of `grid` outside every obstacle at `t` (inside the container with `container`).
+pub(super) fn voxel_free(
+    grid: &MacGrid,
+    bodies: &[RigidBody],
+    t: Real,
+    container: bool,
+) -> Array3<bool> {
+    voxelize(grid, bodies, t, container).mapv(|o| o == FLUID)
+}
+
 /// The obstacle index of every cell whose centre lies inside one (the last body listed wins
 /// where bodies overlap), `FLUID` elsewhere. Only the cells under each body's bounding box are
 /// tested; with `container` the first body owns the cells outside it instead.

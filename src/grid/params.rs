@@ -45,6 +45,9 @@ pub struct GridParams {
     /// Tolerance and iteration cap of the pressure (and viscosity) solves.
     pub pressure: SolverSettings,
     pub smoke: Option<Smoke>,
+    /// Smoke and temperature live on a grid this many times finer than the flow's (1 or 2;
+    /// the turbulence's `upsample`, Pfaff et al. 2009 section 5.2).
+    pub smoke_refinement: usize,
     /// Start of the time-averaged velocity, s; none kept when None.
     pub average_from: Option<Real>,
     /// The first body is a container holding the fluid (a coupled scene's tank): the cells

@@ -4,23 +4,23 @@
 
 use std::time::Instant;
 
-use ndarray::{s, Array3, Zip};
+use ndarray::{Array3, Zip};
 
 use super::advect::{advect, advect_velocity, advect_velocity_into};
 use super::average::RunningAverage;
-use super::boundary::{cells_near, Boundaries};
+use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
-use super::forces::{add_cell_acceleration, buoyancy, confinement};
+use super::forces::{add_cell_acceleration, confinement};
 use super::mac::MacGrid;
-use super::params::{Advection, GridParams, Smoke, SmokeSource, ViscosityScheme};
+use super::params::{Advection, GridParams, ViscosityScheme};
 use super::poisson::{CellKind, PoissonSystem, SolveError};
 use super::project::{max_divergence, project};
+use super::smoke::SmokeState;
 use super::viscosity::diffuse_component;
-use crate::geometry::Body;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::parallel::BLOCK;
 use crate::stepping::towards_end;
-use crate::{Point3, Real, Vec3};
+use crate::{Real, Vec3};
 use rayon::prelude::*;
 
 /// Face layers inside static obstacles that advection sees extrapolated fluid velocity on:
@@ -40,6 +40,8 @@ pub enum GridError {
          than the obstacle"
     )]
     NoFluid { body: String, domain: [Real; 3] },
+    #[error("grid setting out of range: {0}")]
+    Setting(String),
     #[error("static flow: {0}")]
     StaticFlow(String),
     #[error("{what} solve failed at t = {time:.6} s (step {step}): {source}")]
@@ -73,27 +75,6 @@ pub struct GridStepStats {
     pub advect_seconds: f64,
     pub project_seconds: f64,
     pub total_seconds: f64,
-}
-
-/// Smoke density, temperature and their sources.
-#[derive(Debug, Clone)]
-pub struct SmokeState {
-    pub density: Array3<Real>,
-    pub temperature: Option<Array3<Real>>,
-    buoyancy: Real,
-    heat_buoyancy: Real,
-    sources: Vec<SourceRegion>,
-}
-
-/// The cells and faces under a smoke source.
-#[derive(Debug, Clone)]
-struct SourceRegion {
-    cells: Array3<bool>,
-    faces: Option<([Array3<bool>; 3], Vec3)>,
-    density: Real,
-    temperature: Real,
-    /// The source's shape and motion, when it moves: its cells and faces follow it.
-    moving: Option<RigidBody>,
 }
 
 /// The MAC-grid fluid of a scene.
@@ -157,10 +138,16 @@ impl GridSolver {
             return Err(GridError::NoFluid { body, domain });
         }
         bounds.apply(&mut mac);
+        if !(1..=2).contains(&params.smoke_refinement) {
+            return Err(GridError::Setting(format!(
+                "smoke refinement {} (1 or 2)",
+                params.smoke_refinement
+            )));
+        }
         let smoke = params
             .smoke
             .as_ref()
-            .map(|s| smoke_state(&mac, s))
+            .map(|s| SmokeState::new(&mac, s, params.smoke_refinement, &bodies, params.container))
             .transpose()?;
         let system_cells = bounds.cell_kinds();
         let system = PoissonSystem::new(&system_cells, bounds.pressure_boundary());
@@ -256,11 +243,7 @@ impl GridSolver {
         self.bounds
             .extrapolate_into_obstacles(&mut self.mac, EXTRAPOLATION_LAYERS);
         if let Some(smoke) = self.smoke.as_mut() {
-            let stagger = self.mac.cell_stagger();
-            smoke.density = advect(&smoke.density, stagger, &self.mac, dt, scheme);
-            if let Some(t) = smoke.temperature.as_mut() {
-                *t = advect(t, stagger, &self.mac, dt, scheme);
-            }
+            smoke.advect(&self.mac, dt, scheme, self.step);
         }
         self.ran.push("advect");
         if let Some(frozen) = &self.frozen {
@@ -268,7 +251,7 @@ impl GridSolver {
             // this step, has carried the smoke; the velocity itself is not advanced.
             if let Some(smoke) = self.smoke.as_mut() {
                 self.ran.push("forces");
-                apply_sources(smoke, &mut self.mac, &self.bounds, self.time);
+                smoke.apply_sources(&mut self.mac, &self.bounds, self.time);
             }
             self.mac.u.clone_from(frozen);
             self.ran.push("static flow");
@@ -309,6 +292,27 @@ impl GridSolver {
         self.params.container
     }
 
+    /// Interpolates this step's velocity onto the smoke's fine grid (extrapolated into
+    /// obstacles as the step's advection reads it) and lends it beside the flow's faces, so
+    /// the turbulence stage adds its kernels to both (Pfaff et al. 2009, section 5.2: the
+    /// velocity is up-sampled before line 1). `None` for the fine grid when the smoke has
+    /// none; the step then carries the smoke by what this left there.
+    pub fn lend_fine_velocity(&mut self) -> (&mut MacGrid, Option<&mut MacGrid>) {
+        let step = self.step;
+        let fine = self
+            .smoke
+            .as_mut()
+            .and_then(|s| s.fine.as_mut())
+            .map(|fine| {
+                let mut flow = self.mac.clone();
+                self.bounds
+                    .extrapolate_into_obstacles(&mut flow, EXTRAPOLATION_LAYERS);
+                fine.refresh(&flow, step);
+                &mut fine.mac
+            });
+        (&mut self.mac, fine)
+    }
+
     /// Voxelises the obstacles at `t` and the coupled liquid, and rebuilds the pressure system
     /// when the solid cells changed.
     pub(super) fn rebuild_boundaries(&mut self, t: Real) {
@@ -316,6 +320,9 @@ impl GridSolver {
         self.bounds = if self.bodies.iter().any(RigidBody::is_moving) {
             let sides = self.bounds.sides.clone();
             let container = self.params.container;
+            if let Some(smoke) = self.smoke.as_mut() {
+                smoke.place_obstacles(&self.bodies, t, container);
+            }
             Boundaries::new(&self.mac, sides, &self.bodies, t, container, liquid)
         } else {
             self.bounds.with_liquid(&self.mac, &self.bodies, t, liquid)
@@ -409,24 +416,25 @@ impl GridSolver {
             Advection::SemiLagrangian => "semi-Lagrangian",
             Advection::Maccormack => "MacCormack",
         };
-        let scalars = match &self.smoke {
-            Some(s) if s.temperature.is_some() => " and smoke density, temperature",
-            Some(_) => " and smoke density",
-            None => "",
-        };
+        let scalars = self
+            .smoke
+            .as_ref()
+            .map_or(String::new(), |s| format!(" and {}", s.describe()));
         let reflection = if p.reflection {
             ", advection-reflection (two projections)"
         } else {
             ""
         };
         if self.frozen.is_some() {
-            let smoke = self.smoke.as_ref().map_or(0, |s| s.sources.len());
-            out.push((
-                "advect",
-                format!("{scheme} advection of the smoke by the stored flow"),
-            ));
-            if self.smoke.is_some() {
-                out.push(("forces", format!("smoke sources ({smoke})")));
+            if let Some(s) = &self.smoke {
+                out.push((
+                    "advect",
+                    format!(
+                        "{scheme} advection of the {} by the stored flow",
+                        s.describe()
+                    ),
+                ));
+                out.push(("forces", format!("smoke sources ({})", s.source_count())));
             }
             out.push((
                 "static flow",
@@ -442,10 +450,15 @@ impl GridSolver {
         ));
         let mut forces = Vec::new();
         if let Some(s) = &self.smoke {
+            let (density, heat) = s.buoyancy();
             forces.push(format!(
-                "smoke sources ({}), buoyancy {}",
-                s.sources.len(),
-                s.buoyancy
+                "smoke sources ({}), buoyancy {density}, heat buoyancy {heat}{}",
+                s.source_count(),
+                if s.fine.is_some() {
+                    " from the smoke's cell means"
+                } else {
+                    ""
+                }
             ));
         }
         if p.confinement > 0.0 {
@@ -587,15 +600,8 @@ impl GridSolver {
         }
         self.apply_impulses();
         if let Some(smoke) = self.smoke.as_mut() {
-            apply_sources(smoke, &mut self.mac, &self.bounds, self.time);
-            if smoke.buoyancy != 0.0 || smoke.heat_buoyancy != 0.0 {
-                let lift = buoyancy(
-                    &smoke.density,
-                    smoke.temperature.as_ref(),
-                    smoke.buoyancy,
-                    smoke.heat_buoyancy,
-                    self.up,
-                );
+            smoke.apply_sources(&mut self.mac, &self.bounds, self.time);
+            if let Some(lift) = smoke.lift(self.up) {
                 add_cell_acceleration(&mut self.mac, &lift, dt);
             }
         }
@@ -713,15 +719,6 @@ fn up_of(gravity: Vec3) -> Vec3 {
     }
 }
 
-/// Sets `field` to `value` where `mask` holds.
-fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
-    Zip::from(field).and(mask).par_for_each(|f, &m| {
-        if m {
-            *f = value;
-        }
-    });
-}
-
 /// |after - before| / |before| over all faces (|after| when before is zero).
 fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
     let add = |(d1, n1): (Real, Real), (d2, n2): (Real, Real)| (d1 + d2, n1 + n2);
@@ -747,119 +744,4 @@ fn change_rate(before: &[Array3<Real>; 3], after: &[Array3<Real>; 3]) -> Real {
     } else {
         diff.sqrt()
     }
-}
-
-/// Builds the smoke fields and voxelises the sources (static, in the world frame).
-fn smoke_state(mac: &MacGrid, smoke: &Smoke) -> Result<SmokeState, GridError> {
-    let sources = smoke
-        .sources
-        .iter()
-        .enumerate()
-        .map(|(i, s)| source_region(mac, s, i))
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(SmokeState {
-        density: Array3::zeros(mac.dims),
-        temperature: smoke.has_temperature().then(|| Array3::zeros(mac.dims)),
-        buoyancy: smoke.buoyancy,
-        heat_buoyancy: smoke.heat_buoyancy,
-        sources,
-    })
-}
-
-fn source_region(
-    mac: &MacGrid,
-    source: &SmokeSource,
-    index: usize,
-) -> Result<SourceRegion, GridError> {
-    let body = RigidBody::from_scene(
-        &Body {
-            name: Some(format!("smoke source {index}")),
-            shape: source.shape.clone(),
-            position: source.position,
-            rotation: source.rotation,
-            motion: source.motion.clone(),
-            abl: None,
-        },
-        index,
-    )?;
-    let (cells, faces) = source_cells(mac, &body, source.velocity.is_some(), 0.0);
-    Ok(SourceRegion {
-        cells,
-        faces: faces.map(|f| (f, Vec3::from(source.velocity.unwrap_or_default()))),
-        density: source.density,
-        temperature: source.temperature,
-        moving: body.is_moving().then_some(body),
-    })
-}
-
-/// The cells (and with `faces` the faces of each component) whose centres lie in `body` at `t`.
-/// Only the samples under the body's bounding box (a cell wider on every side, so the faces
-/// on its edges are in) are tested: a moving source is placed again every step.
-#[allow(clippy::type_complexity)]
-fn source_cells(
-    mac: &MacGrid,
-    body: &RigidBody,
-    faces: bool,
-    t: Real,
-) -> (Array3<bool>, Option<[Array3<bool>; 3]>) {
-    let pose = body.pose(t);
-    let inside = |x: Vec3| {
-        body.signed_distance_local(&pose.inverse_transform_point(&Point3::from(x))) <= 0.0
-    };
-    let near = cells_near(mac, body, t, mac.dx);
-    // Marks the samples of a `shape` array inside the body, `at` their centres; the ranges
-    // reach one further along `face` (a face array has a sample more along its own axis).
-    let mark =
-        |shape: [usize; 3], face: Option<usize>, at: &(dyn Fn([usize; 3]) -> Vec3 + Sync)| {
-            let mut out = Array3::from_elem(shape, false);
-            let [rx, ry, rz]: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| {
-                let end = near[a].end + usize::from(face == Some(a));
-                near[a].start..end.min(out.shape()[a])
-            });
-            let origin = [rx.start, ry.start, rz.start];
-            Zip::indexed(out.slice_mut(s![rx, ry, rz])).par_for_each(|(i, j, k), m| {
-                *m = inside(at([origin[0] + i, origin[1] + j, origin[2] + k]))
-            });
-            out
-        };
-    let cells = mark(mac.dims, None, &|c| mac.cell_center(c));
-    let faces = faces.then(|| {
-        std::array::from_fn(|a| {
-            let (x, y, z) = mac.u[a].dim();
-            mark([x, y, z], Some(a), &|f| mac.face_center(a, f))
-        })
-    });
-    (cells, faces)
-}
-
-/// The smoke sources' density, temperature and face velocities, and no smoke inside obstacles.
-fn apply_sources(smoke: &mut SmokeState, mac: &mut MacGrid, bounds: &Boundaries, t: Real) {
-    for src in &mut smoke.sources {
-        if let Some(body) = &src.moving {
-            let (cells, faces) = source_cells(mac, body, src.faces.is_some(), t);
-            src.cells = cells;
-            if let (Some((old, _)), Some(new)) = (src.faces.as_mut(), faces) {
-                *old = new;
-            }
-        }
-    }
-    for src in &smoke.sources {
-        set_where(&mut smoke.density, &src.cells, src.density);
-        if let Some(t) = smoke.temperature.as_mut() {
-            set_where(t, &src.cells, src.temperature);
-        }
-        if let Some((faces, v)) = &src.faces {
-            for a in 0..3 {
-                set_where(&mut mac.u[a], &faces[a], v[a]);
-            }
-        }
-    }
-    let fluid = bounds.fluid_mask();
-    Zip::from(&mut smoke.density)
-        .and(&fluid)
-        .par_for_each(|s, &f| {
-            if !f {
-                *s = 0.0;
-            }
-        });
 }

@@ -140,6 +140,29 @@ impl Frames {
                 "frames.h5: /particles and /grid, links to both series, open together".into(),
             ));
         }
+        let fine = sim
+            .grid
+            .as_ref()
+            .and_then(|g| g.smoke.as_ref()?.fine.as_ref());
+        if let Some(fine) = fine.filter(|_| self.vtk || self.hdf5) {
+            let files = [
+                (self.vtk, "VTK frames + smoke_fine.pvd"),
+                (self.hdf5, "smoke_fine.h5"),
+            ]
+            .iter()
+            .filter(|f| f.0)
+            .map(|f| f.1)
+            .collect::<Vec<_>>()
+            .join(", ");
+            out.push((
+                "smoke",
+                format!(
+                    "{files}: smoke on its {:?} grid every {} s (the grid frames hold its cell \
+                     means)",
+                    fine.mac.dims, self.interval
+                ),
+            ));
+        }
         out
     }
 }
@@ -411,9 +434,15 @@ impl Pipeline {
                 sph,
             )?);
         }
-        if self.sim.grid.is_some() {
+        if let Some(grid) = self.sim.grid.as_ref() {
             let name = hdf5(Kind::Grid);
-            f.grid = Some(GridFrames::new(out, f.vtk, name.as_deref(), &f.attrs)?);
+            f.grid = Some(GridFrames::new(
+                out,
+                f.vtk,
+                name.as_deref(),
+                &f.attrs,
+                grid,
+            )?);
         }
         if f.hdf5 && f.both {
             // One file that opens both series: /particles and /grid link to their indexes.

@@ -147,39 +147,69 @@ impl ParticleFrames {
     }
 }
 
-/// The grid frame writers: `grid.pvd` with `grid_NNNNNN.vti`, and `frames.h5`.
-pub struct GridFrames(Writers<Hdf5GridFrames>);
+/// The grid frame writers: `grid.pvd` with `grid_NNNNNN.vti`, and `frames.h5`; with smoke on a
+/// finer grid (section 5.2), also `smoke_fine.pvd` with `smoke_fine_NNNNNN.vti` and
+/// `smoke_fine.h5` (with HDF5) on that grid, while the flow's frames carry the smoke's cell
+/// means.
+pub struct GridFrames {
+    flow: Writers<Hdf5GridFrames>,
+    fine_smoke: Option<Writers<Hdf5GridFrames>>,
+}
 
-impl GridFrames {
-    /// Writers into `out`; `hdf5` names the HDF5 file when the scene asked for one.
-    pub fn new(
+impl Writers<Hdf5GridFrames> {
+    /// The `series.pvd` (with `vtk`) and the HDF5 file `hdf5` of one grid in `out`.
+    fn grid(
         out: &Path,
         vtk: bool,
+        series: &str,
         hdf5: Option<&str>,
         attrs: &[(&str, AttrValue)],
     ) -> Result<Self, IoError> {
         let hdf5 = hdf5
             .map(|name| Hdf5GridFrames::create(&out.join(name), attrs))
             .transpose()?;
-        Ok(Self(Writers {
+        Ok(Self {
             out: out.to_path_buf(),
-            pvd: vtk.then(|| PvdSeries::new(&out.join("grid.pvd"))),
+            pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{series}.pvd")))),
             hdf5,
             count: 0,
-        }))
+        })
+    }
+}
+
+/// The series (and HDF5 file stem) of the smoke on its fine grid.
+const FINE_SMOKE: &str = "smoke_fine";
+
+impl GridFrames {
+    /// Writers into `out` for `solver`'s frames; `hdf5` names the HDF5 file when the scene
+    /// asked for one.
+    pub fn new(
+        out: &Path,
+        vtk: bool,
+        hdf5: Option<&str>,
+        attrs: &[(&str, AttrValue)],
+        solver: &GridSolver,
+    ) -> Result<Self, IoError> {
+        let fine = solver.smoke.as_ref().is_some_and(|s| s.fine.is_some());
+        let fine_h5 = format!("{FINE_SMOKE}.h5");
+        Ok(Self {
+            flow: Writers::grid(out, vtk, "grid", hdf5, attrs)?,
+            fine_smoke: fine
+                .then(|| Writers::grid(out, vtk, FINE_SMOKE, hdf5.map(|_| fine_h5.as_str()), attrs))
+                .transpose()?,
+        })
     }
 
     /// Velocity, vorticity, pressure, smoke, temperature, the obstacle cells and, with
     /// `turbulence`, the boundary-layer field `abl_vorticity`, and in the HDF5 frame the
-    /// grid's vortex particles as the group `vortices`.
+    /// grid's vortex particles as the group `vortices`; the fine smoke into its own series.
     pub fn write(
         &mut self,
         solver: &GridSolver,
         turbulence: Option<&Turbulence>,
         vortices: Option<&ParticleFrame>,
     ) -> Result<(), IoError> {
-        let w = &mut self.0;
-        if !w.any() {
+        if !self.flow.any() {
             return Ok(());
         }
         let vel = solver.mac.cell_velocity();
@@ -203,12 +233,19 @@ impl GridFrames {
                 [x.view(), y.view(), z.view()],
             ));
         }
-        if let Some(smoke) = &solver.smoke {
-            fields.push(GridField::scalar("smoke", smoke.density.view()));
-            if let Some(t) = &smoke.temperature {
-                fields.push(GridField::scalar("temperature", t.view()));
-            }
-        }
+        let smoke = solver.smoke.as_ref();
+        let density = smoke.map(|s| s.on_flow_cells(&s.density));
+        let temperature = smoke.and_then(|s| Some(s.on_flow_cells(s.temperature.as_ref()?)));
+        fields.extend(
+            density
+                .as_ref()
+                .map(|d| GridField::scalar("smoke", d.view())),
+        );
+        fields.extend(
+            temperature
+                .as_ref()
+                .map(|t| GridField::scalar("temperature", t.view())),
+        );
         let frame = GridFrame {
             step: solver.steps(),
             time: solver.time(),
@@ -217,18 +254,42 @@ impl GridFrames {
             dims: solver.mac.dims,
             fields,
         };
-        w.push(
+        self.flow.push(
             &frame,
             frame.time,
             ("grid", "vti"),
             write_grid_vtk,
             |h5, f| h5.append_with(f, &sets(vortices)),
-        )
+        )?;
+        if let (Some(w), Some(s)) = (self.fine_smoke.as_mut(), smoke) {
+            let grid = &s.fine.as_ref().expect("a fine series for fine smoke").mac;
+            let mut fields = vec![GridField::scalar("smoke", s.density.view())];
+            fields.extend(
+                s.temperature
+                    .as_ref()
+                    .map(|t| GridField::scalar("temperature", t.view())),
+            );
+            let frame = GridFrame {
+                fields,
+                origin: grid.origin,
+                spacing: grid.dx,
+                dims: grid.dims,
+                ..frame
+            };
+            w.push(
+                &frame,
+                frame.time,
+                (FINE_SMOKE, "vti"),
+                write_grid_vtk,
+                |h5, f| h5.append(f),
+            )?;
+        }
+        Ok(())
     }
 
     /// Frames written so far.
     pub fn count(&self) -> usize {
-        self.0.count
+        self.flow.count
     }
 
     /// The time-averaged velocity as `average.vti`, when the grid keeps one.
@@ -251,7 +312,7 @@ impl GridFrames {
                 [vel[0].view(), vel[1].view(), vel[2].view()],
             )],
         };
-        write_grid_vtk(&self.0.out.join("average.vti"), &frame)
+        write_grid_vtk(&self.flow.out.join("average.vti"), &frame)
     }
 }
 
@@ -336,7 +397,14 @@ impl VortexFrames {
 /// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
-    const FIXED: [&str; 4] = ["scene.toml", "average.vti", "particles.pvd", "grid.pvd"];
+    const FIXED: [&str; 6] = [
+        "scene.toml",
+        "average.vti",
+        "particles.pvd",
+        "grid.pvd",
+        "smoke_fine.pvd",
+        "smoke_fine.h5",
+    ];
     // Written once per medium in a scene with both, as `particles_NAME` and `grid_NAME`.
     const PER_MEDIUM: [&str; 4] = ["metrics.csv", "probes.csv", "frames.h5", "vortices.pvd"];
     let six_digits =
@@ -356,6 +424,8 @@ pub fn is_run_output(name: &str) -> bool {
         || numbered(unprefixed, "vortices_", ".vtp")
         || numbered(name, "particles_", ".vtp")
         || numbered(name, "grid_", ".vti")
+        || numbered(name, "smoke_fine_", ".vti")
+        || numbered(name, "smoke_fine_", ".h5")
         || numbered(unprefixed, "frames_", ".h5")
         || (name.starts_with("profile_") && name.ends_with(".csv"))
 }

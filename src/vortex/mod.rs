@@ -13,7 +13,7 @@ pub mod synthesis;
 
 pub use dynamics::{Dynamics, DynamicsSettings, StepReport};
 pub use particles::VortexParticles;
-pub use synthesis::{synthesize, SynthesisReport};
+pub use synthesis::{synthesize, synthesize_refined, SynthesisReport};
 
 use crate::{Real, Vec3};
 use ndarray::ArrayViewMut3;

@@ -9,7 +9,9 @@
 //! - `seeding` (lines 11–20): the shared routine over the cells with nonzero omega_ABL, with
 //!   the distance to the nearest wall as mixing length.
 //! - `vortex dynamics` (lines 23–24) and `synthesis` (line 25): the vortex layer, reading and
-//!   writing the grid through its source and sink.
+//!   writing the grid through its source and sink. With `upsample = 2` and smoke, the flow's
+//!   velocity is first interpolated onto the smoke's grid twice as fine (section 5.2) and the
+//!   kernels are added there too, so the smoke is carried by them at that resolution.
 
 use ndarray::Array3;
 
@@ -22,7 +24,7 @@ use crate::grid::{Advection, GridSolver};
 use crate::pipeline::simulation::{Simulation, StepError};
 use crate::pipeline::stages::{Stage, StepRecord};
 use crate::pipeline::RunError;
-use crate::vortex::{synthesize, VortexParticles};
+use crate::vortex::{synthesize, synthesize_refined, VortexParticles};
 use crate::{Real, Vec3};
 
 /// The stage's parts, in order.
@@ -213,7 +215,12 @@ impl Stage for GridTurbulence {
         "turbulence"
     }
 
-    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let fine_smoke = sim
+            .grid
+            .as_ref()
+            .and_then(|g| g.smoke.as_ref())
+            .is_some_and(|s| s.fine.is_some());
         let (headline, [wall, seeding, dynamics]) = self.common.describe("cells");
         (
             headline,
@@ -235,8 +242,13 @@ impl Stage for GridTurbulence {
                 (
                     PARTS[4],
                     format!(
-                        "Eq. 14 weights onto the grid's faces, on a lattice {}x finer",
-                        self.common.settings.params.upsample
+                        "Eq. 14 weights onto the grid's faces, on a lattice {}x finer{}",
+                        self.common.settings.params.upsample,
+                        if fine_smoke {
+                            ", and onto the smoke's fine faces"
+                        } else {
+                            ""
+                        }
                     ),
                 ),
             ],
@@ -281,11 +293,18 @@ impl Stage for GridTurbulence {
         stats.merged = report.merged;
         stats.dissipated = report.dissipated;
         laps.lap(3);
-        synthesize(
-            &state.vortices,
-            &mut grid.mac,
-            self.common.settings.params.upsample,
-        )?;
+        let upsample = self.common.settings.params.upsample;
+        match grid.lend_fine_velocity() {
+            (flow, Some(fine)) => {
+                let [u, v, w] = &mut fine.u;
+                let faces = [u.view_mut(), v.view_mut(), w.view_mut()];
+                synthesize_refined(&state.vortices, flow, upsample, faces)?;
+                fine.sync_periodic();
+            }
+            (flow, None) => {
+                synthesize(&state.vortices, flow, upsample)?;
+            }
+        }
         if grid.has_liquid() {
             // The faces under a coupled liquid carry its velocity, not the air's kernels.
             grid.bounds.apply(&mut grid.mac);

@@ -3,9 +3,10 @@
 //! velocity, while the pressure projection stays on the coarse grid.
 //!
 //! The fine velocity is the flow's faces interpolated trilinearly to the fine faces (each fine
-//! face reads its component at its own centre, [`super::interp::Stagger::sample`]), plus the vortex kernels
-//! evaluated on the fine faces by the turbulence stage. The smoke's buoyancy acts on the flow
-//! through the cell means of the fine smoke ([`FineGrid::restrict`]), which keep its total.
+//! face reads its component at its own centre, as [`super::interp::Stagger::sample`] would),
+//! plus the vortex kernels evaluated on the fine faces by the turbulence stage. The smoke's
+//! buoyancy acts on the flow through the cell means of the fine smoke
+//! ([`FineGrid::restrict`]), which keep its total.
 
 use ndarray::{Array3, Axis, Zip};
 use rayon::prelude::*;
@@ -25,6 +26,8 @@ pub struct FineGrid {
     pub factor: usize,
     /// Fine cells outside every obstacle, voxelised at the fine resolution.
     free: Array3<bool>,
+    /// The flow's faces as [`Self::refresh`] reads them, kept so a step allocates nothing.
+    flow: MacGrid,
     /// The step (of the flow's count) whose velocity `mac` holds with the kernels added, set
     /// by [`Self::refresh`]; a step without it interpolates the flow afresh.
     fresh: Option<u64>,
@@ -51,6 +54,7 @@ impl FineGrid {
             mac,
             factor,
             free,
+            flow: flow.clone(),
             fresh: None,
         }
     }
@@ -60,48 +64,20 @@ impl FineGrid {
         self.free = voxel_free(&self.mac, bodies, t, container);
     }
 
-    /// Interpolates the flow's velocity onto the fine faces: per axis, each fine sample's two
-    /// coarse neighbours and weight are tabulated once ([`axis_weights`], the trilinear
-    /// interpolation of [`super::interp::Stagger::sample`]), then each fine face sums its eight corners.
+    /// Interpolates the flow's velocity onto the fine faces ([`prolong`]).
     pub fn prolong(&mut self, flow: &MacGrid) {
-        let scale = 1.0 / self.factor as Real;
-        for a in 0..3 {
-            let (coarse, fine) = (flow.face_stagger(a), self.mac.face_stagger(a));
-            let tables: [Vec<AxisWeights>; 3] = std::array::from_fn(|b| {
-                (0..fine.shape[b])
-                    .map(|f| {
-                        let g = (f as Real + fine.offset[b]) * scale - coarse.offset[b];
-                        axis_weights(g, coarse.shape[b], coarse.period[b])
-                    })
-                    .collect()
-            });
-            let src = flow.u[a]
-                .as_slice()
-                .expect("face arrays are in standard layout");
-            let [_, ny, nz] = coarse.shape;
-            let [tx, ty, tz] = &tables;
-            self.mac.u[a]
-                .axis_iter_mut(Axis(0))
-                .into_par_iter()
-                .zip(tx.par_iter())
-                .for_each(|(mut plane, &(x0, x1, wx))| {
-                    for ((j, k), v) in plane.indexed_iter_mut() {
-                        let ((y0, y1, wy), (z0, z1, wz)) = (ty[j], tz[k]);
-                        let row = |x: usize, y: usize| {
-                            let r = (x * ny + y) * nz;
-                            (1.0 - wz) * src[r + z0] + wz * src[r + z1]
-                        };
-                        let plane_at = |x: usize| (1.0 - wy) * row(x, y0) + wy * row(x, y1);
-                        *v = (1.0 - wx) * plane_at(x0) + wx * plane_at(x1);
-                    }
-                });
-        }
+        prolong(flow, &mut self.mac, self.factor);
     }
 
-    /// [`Self::prolong`] for step `step`, marked so that the step's advection uses it with
+    /// [`Self::prolong`] of `flow` as `prepare` leaves a copy of it (the faces extrapolated
+    /// into obstacles), for step `step`, marked so that the step's advection uses it with
     /// whatever is added to it meanwhile (the turbulence stage's fine kernels).
-    pub fn refresh(&mut self, flow: &MacGrid, step: u64) {
-        self.prolong(flow);
+    pub fn refresh(&mut self, flow: &MacGrid, prepare: impl FnOnce(&mut MacGrid), step: u64) {
+        for (copy, u) in self.flow.u.iter_mut().zip(&flow.u) {
+            copy.assign(u);
+        }
+        prepare(&mut self.flow);
+        prolong(&self.flow, &mut self.mac, self.factor);
         self.fresh = Some(step);
     }
 
@@ -145,5 +121,44 @@ impl FineGrid {
             *m = sum * inv;
         });
         out
+    }
+}
+
+/// Interpolates the velocity of `flow` onto the faces of `fine_grid`, `factor` times finer:
+/// per axis, each fine sample's two coarse neighbours and weight are tabulated once
+/// ([`axis_weights`], the trilinear interpolation of [`super::interp::Stagger::sample`]), then
+/// each fine face sums its eight corners.
+fn prolong(flow: &MacGrid, fine_grid: &mut MacGrid, factor: usize) {
+    let scale = 1.0 / factor as Real;
+    for a in 0..3 {
+        let (coarse, fine) = (flow.face_stagger(a), fine_grid.face_stagger(a));
+        let tables: [Vec<AxisWeights>; 3] = std::array::from_fn(|b| {
+            (0..fine.shape[b])
+                .map(|f| {
+                    let g = (f as Real + fine.offset[b]) * scale - coarse.offset[b];
+                    axis_weights(g, coarse.shape[b], coarse.period[b])
+                })
+                .collect()
+        });
+        let src = flow.u[a]
+            .as_slice()
+            .expect("face arrays are in standard layout");
+        let [_, ny, nz] = coarse.shape;
+        let [tx, ty, tz] = &tables;
+        fine_grid.u[a]
+            .axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .zip(tx.par_iter())
+            .for_each(|(mut plane, &(x0, x1, wx))| {
+                for ((j, k), v) in plane.indexed_iter_mut() {
+                    let ((y0, y1, wy), (z0, z1, wz)) = (ty[j], tz[k]);
+                    let row = |x: usize, y: usize| {
+                        let r = (x * ny + y) * nz;
+                        (1.0 - wz) * src[r + z0] + wz * src[r + z1]
+                    };
+                    let plane_at = |x: usize| (1.0 - wy) * row(x, y0) + wy * row(x, y1);
+                    *v = (1.0 - wx) * plane_at(x0) + wx * plane_at(x1);
+                }
+            });
     }
 }

@@ -169,7 +169,11 @@ impl SmokeState {
             "smoke density"
         };
         match &self.fine {
-            Some(f) => format!("{what} on a grid {}x finer, by the flow's velocity interpolated plus the fine kernels", f.factor),
+            Some(f) => format!(
+                "{what} on a grid {}x finer, by the flow's velocity interpolated plus the fine \
+                 kernels",
+                f.factor
+            ),
             None => what.to_owned(),
         }
     }
@@ -250,7 +254,7 @@ fn mark(grid: &MacGrid, body: &RigidBody, t: Real, face: Option<usize>) -> Array
 }
 
 /// Sets `field` to `value` where `mask` holds.
-pub(super) fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
+fn set_where(field: &mut Array3<Real>, mask: &Array3<bool>, value: Real) {
     Zip::from(field).and(mask).par_for_each(|f, &m| {
         if m {
             *f = value;

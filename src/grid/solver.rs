@@ -304,10 +304,11 @@ impl GridSolver {
             .as_mut()
             .and_then(|s| s.fine.as_mut())
             .map(|fine| {
-                let mut flow = self.mac.clone();
-                self.bounds
-                    .extrapolate_into_obstacles(&mut flow, EXTRAPOLATION_LAYERS);
-                fine.refresh(&flow, step);
+                let bounds = &self.bounds;
+                let extrapolate = |f: &mut MacGrid| {
+                    bounds.extrapolate_into_obstacles(f, EXTRAPOLATION_LAYERS);
+                };
+                fine.refresh(&self.mac, extrapolate, step);
                 &mut fine.mac
             });
         (&mut self.mac, fine)

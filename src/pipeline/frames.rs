@@ -41,6 +41,16 @@ struct Writers<H> {
 }
 
 impl<H> Writers<H> {
+    /// The series `series.pvd` in `out` (with `vtk`) and the HDF5 file `hdf5`, when opened.
+    fn new(out: &Path, vtk: bool, series: &str, hdf5: Option<H>) -> Self {
+        Self {
+            out: out.to_path_buf(),
+            pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{series}.pvd")))),
+            hdf5,
+            count: 0,
+        }
+    }
+
     fn any(&self) -> bool {
         self.pvd.is_some() || self.hdf5.is_some()
     }
@@ -91,12 +101,7 @@ impl ParticleFrames {
                 Hdf5Frames::create(&out.join(name), &all)
             })
             .transpose()?;
-        Ok(Self(Writers {
-            out: out.to_path_buf(),
-            pvd: vtk.then(|| PvdSeries::new(&out.join("particles.pvd"))),
-            hdf5,
-            count: 0,
-        }))
+        Ok(Self(Writers::new(out, vtk, "particles", hdf5)))
     }
 
     /// Position, velocity, density, pressure, the hooks' fields and the carried fields, and in
@@ -168,12 +173,7 @@ impl Writers<Hdf5GridFrames> {
         let hdf5 = hdf5
             .map(|name| Hdf5GridFrames::create(&out.join(name), attrs))
             .transpose()?;
-        Ok(Self {
-            out: out.to_path_buf(),
-            pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{series}.pvd")))),
-            hdf5,
-            count: 0,
-        })
+        Ok(Self::new(out, vtk, series, hdf5))
     }
 }
 
@@ -367,15 +367,7 @@ pub struct VortexFrames(Writers<()>, String);
 impl VortexFrames {
     /// The series in `out` named `name`, written when `vtk`.
     pub fn new(out: &Path, name: &str, vtk: bool) -> Self {
-        Self(
-            Writers {
-                out: out.to_path_buf(),
-                pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{name}.pvd")))),
-                hdf5: None,
-                count: 0,
-            },
-            name.to_owned(),
-        )
+        Self(Writers::new(out, vtk, name, None), name.to_owned())
     }
 
     /// Writes the next file of the series.

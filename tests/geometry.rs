@@ -24,6 +24,7 @@ fn body(shape: Shape) -> Body {
         rotation: [0.4, -0.7, 0.25],
         motion: Motion::default(),
         abl: None,
+        wall_viscosity: None,
     }
 }
 

@@ -263,6 +263,7 @@ fn bad_grid_input_is_reported() {
         rotation: [0.0; 3],
         motion: Default::default(),
         abl: None,
+        wall_viscosity: None,
     });
     match GridSolver::new(
         &grid_params(&s).expect("a grid"),

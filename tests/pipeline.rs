@@ -256,6 +256,7 @@ fn solvers_build_from_parameters_alone() {
         gravity: Vec3::zeros(),
         pressure: Default::default(),
         viscosity: Default::default(),
+        wall_viscosity: Vec::new(),
         limits: StepLimits::default(),
         domain: (Vec3::repeat(-5.0), Vec3::repeat(5.0)),
         container: false,

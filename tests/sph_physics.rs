@@ -352,3 +352,58 @@ fn explicit_viscosity_keeps_its_step_bound() {
         "{err}"
     );
 }
+
+/// A no-slip wall holds a linear shear: the tank's water (20 spacings deep) moving as
+/// u = (gamma y, 0, 0) over a floor at rest is a steady Couette flow, so Eq. 4 must give it no
+/// viscous force anywhere, the first layer at the floor included, when the tank's
+/// `wall_viscosity` equals the water's (the no-slip gain in `sph::boundary`). With a free-slip
+/// tank that layer is pulled along by the faster water above it alone.
+#[test]
+fn a_no_slip_wall_holds_a_linear_shear_without_force() {
+    let (nu, gamma) = (0.01, 2.0);
+    let first_layer = |wall: Real| {
+        let nu_set = format!("viscosity.kinematic={nu}");
+        let wall_set = format!("container.wall_viscosity={wall}");
+        let mut s = solver(&scene(
+            "scenes/hydrostatic_tank.toml",
+            &["gravity=[0.0, 0.0, 0.0]", &nu_set, &wall_set],
+        ));
+        s.fluid
+            .v
+            .iter_mut()
+            .zip(&s.fluid.x)
+            .for_each(|(v, x)| *v = Vec3::new(gamma * x.y, 0.0, 0.0));
+        let accel = s.non_pressure_accelerations();
+        let h = s.spacing;
+        // Away from the side walls, whose samples' volumes differ from a flat floor's within
+        // two supports of a corner, and from the surface (0.4 m up).
+        let interior = |x: &Vec3| {
+            [x.x, x.z].iter().all(|&c| c > 5.0 * h && c < 0.4 - 5.0 * h) && x.y < 0.4 - 3.0 * h
+        };
+        let (mut layer, mut above) = (Vec::new(), 0.0 as Real);
+        for (x, a) in s.fluid.x.iter().zip(&accel) {
+            if interior(x) && x.y < h {
+                layer.push(a.x);
+            } else if interior(x) {
+                above = above.max(a.norm());
+            }
+        }
+        let mean = layer.iter().sum::<Real>() / layer.len() as Real;
+        (
+            mean,
+            layer.iter().fold(0.0 as Real, |m, a| m.max(a.abs())),
+            above,
+        )
+    };
+    // The scale of the force: nu gamma / spacing, the pull of one missing layer.
+    let scale = nu * gamma / 0.02;
+    let (slip, _, _) = first_layer(0.0);
+    let (no_slip_mean, no_slip_max, above) = first_layer(nu);
+    eprintln!(
+        "first layer: free-slip {slip:.4e}, no-slip {no_slip_mean:.3e} (max {no_slip_max:.3e}), \
+         above {above:.3e} m/s^2, scale {scale:.3e}"
+    );
+    assert!(slip > 0.3 * scale, "free slip: {slip}");
+    assert!(no_slip_max < 1e-9 * scale, "no slip: {no_slip_max}");
+    assert!(above < 1e-9 * scale, "the water above: {above}");
+}

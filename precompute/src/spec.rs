@@ -337,6 +337,7 @@ impl ObstacleSpec {
                 ..Default::default()
             },
             abl: None,
+            wall_viscosity: None,
         }
     }
 

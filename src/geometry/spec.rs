@@ -29,6 +29,13 @@ pub struct Body {
     /// of grid scenes only; the scene refuses it elsewhere).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub abl: Option<AblLink>,
+    /// Kinematic viscosity of this body's wall against the SPH fluid (Liu et al. 2021 Eq. 4
+    /// over the body's samples), m^2/s: equal to `viscosity.kinematic` for a no-slip wall
+    /// (`sph::boundary::no_slip_gain`), 0 for free slip; `viscosity.boundary` when left out.
+    /// Lets one scene hold a no-slip cylinder between free-slip slab walls (SPH scenes only;
+    /// the grid's walls are set by `grid.boundary`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_viscosity: Option<Real>,
 }
 
 /// An obstacle's link to its precomputed boundary layer (Pfaff et al. 2009, section 5.1).

@@ -206,6 +206,7 @@ impl SourceRegion {
                 rotation: source.rotation,
                 motion: source.motion.clone(),
                 abl: None,
+                wall_viscosity: None,
             },
             index,
         )?;

@@ -8,7 +8,7 @@ use crate::grid::poisson::SolverSettings;
 use crate::grid::{GridError, GridParams, GridSolver};
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
-use crate::Vec3;
+use crate::{Real, Vec3};
 
 /// The bodies of a scene: the container first, then the obstacles.
 pub fn bodies(scene: &Scene) -> Result<Vec<RigidBody>, GeometryError> {
@@ -42,12 +42,21 @@ pub fn sph_params(scene: &Scene) -> Option<SphParams> {
         gravity: Vec3::from(scene.gravity),
         pressure: scene.pressure.clone(),
         viscosity: scene.viscosity.clone(),
+        wall_viscosity: wall_viscosities(scene),
         limits: step_limits(scene),
         domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
         container: scene.container.is_some(),
         inflows: fluid.inflow.clone(),
         outflows: fluid.outflow.clone(),
     })
+}
+
+/// Per body of [`bodies`]: its `wall_viscosity`, else the scene's `viscosity.boundary`.
+pub fn wall_viscosities(scene: &Scene) -> Vec<Real> {
+    let bodies = scene.container.iter().chain(&scene.obstacles);
+    bodies
+        .map(|b| b.wall_viscosity.unwrap_or(scene.viscosity.boundary))
+        .collect()
 }
 
 /// Sets the scene's analytic `grid.initial_flow` on a grid built from it (nothing without one).

@@ -2,7 +2,7 @@
 
 use super::validate::{Checker, Interval};
 use super::{Domain, Fluid, SceneError};
-use crate::sph::DomainSide;
+use crate::sph::{DomainSide, InflowShape};
 
 impl Fluid {
     /// Each inflow's rectangle on its side holds at least one lattice site, its velocity points
@@ -32,6 +32,28 @@ impl Fluid {
             }
             c.vec3(&format!("{key}.velocity"), inflow.velocity)?;
             let axis = side.axis();
+            let tangents = side.tangents();
+            match (inflow.shape, inflow.across) {
+                (InflowShape::Plane, Some(a)) if tangents.contains(&a) => {}
+                (InflowShape::Plane, across) => {
+                    return Err(c.invalid(
+                        format!("{key}.across"),
+                        across.map_or("nothing".into(), |a| a.to_string()),
+                        format!(
+                            "{} or {}: a plane profile runs across one of the side's axes",
+                            tangents[0], tangents[1]
+                        ),
+                    ));
+                }
+                (_, Some(a)) => {
+                    return Err(c.invalid(
+                        format!("{key}.across"),
+                        a,
+                        "no value: only `shape = \"plane\"` takes an axis",
+                    ));
+                }
+                (_, None) => {}
+            }
             let inward = inflow.velocity[axis] * side.inward()[axis];
             if inward <= 0.0 {
                 let sign = if side.is_max() { "< 0" } else { "> 0" };

@@ -69,6 +69,17 @@ impl Scene {
         let mut body_names: Vec<(&str, String)> = Vec::new();
         for (key, body) in bodies {
             c.body(&key, body)?;
+            if let Some(nu) = body.wall_viscosity {
+                c.num(&format!("{key}.wall_viscosity"), nu, Interval::ge(0.0))?;
+                if self.fluid.is_none() {
+                    return Err(c.invalid(
+                        format!("{key}.wall_viscosity"),
+                        Number(nu),
+                        "no value in a scene without `[fluid]`: it sets the SPH walls' no-slip \
+                         strength (a grid's walls are set by `grid.boundary`)",
+                    ));
+                }
+            }
             // A body placed outside the domain is a typo (a lost minus sign, the wrong unit).
             if body.motion.keyframes.is_empty() {
                 self.point_inside(&c, &format!("{key}.position"), &body.position)?;
@@ -173,14 +184,16 @@ impl Scene {
         c.num("viscosity.boundary", v.boundary, Interval::ge(0.0))?;
         c.num("viscosity.xsph", v.xsph, Interval::closed(0.0, 1.0))?;
         let spacing = self.fluid.as_ref().map(|f| f.spacing).filter(|s| *s > 0.0);
-        let limit = spacing.and_then(|s| crate::sph::forces::viscous_step_limit(s, v));
+        let walls = super::build::wall_viscosities(self);
+        let limit =
+            spacing.and_then(|s| crate::sph::forces::viscous_step_limit(s, v.kinematic, &walls));
         if let Some(limit) = limit.filter(|l| *l < self.time.dt_min) {
             return Err(c.invalid(
                 "viscosity.kinematic",
                 v.kinematic,
                 format!(
                     "a stable step of at least `time.dt_min` = {} s: explicit viscosity at \
-                     fluid.spacing {} needs dt <= {} spacing^2 / (kinematic + boundary) = \
+                     fluid.spacing {} needs dt <= {} spacing^2 / (kinematic + the strongest wall's) = \
                      {limit:.3e} s",
                     self.time.dt_min,
                     spacing.unwrap_or_default(),

@@ -42,6 +42,43 @@ use rayon::prelude::*;
 /// How far behind a body's surface its samples lie, in fluid spacings (see the module doc).
 pub const MIRROR_DEPTH: Real = 0.6;
 
+/// The factor on a wall's viscosity that makes it no-slip at the fluid's: with it, a wall whose
+/// `wall_viscosity` equals `viscosity.kinematic` pulls the first fluid layer of a linear shear
+/// flow u = (gamma y, 0, 0) exactly as the fluid lattice beyond the surface carrying that flow
+/// on would (the mirror no-slip condition), so a steady shear flow feels no net viscous force
+/// there. Eq. 4 of Liu et al. 2021 over that missing lattice against the same sum over the
+/// [`MIRROR_DEPTH`] layer of samples at rest, with their flat-wall volumes (about 2.17 at a
+/// support of two spacings: the one layer stands in for the lattice, and is still).
+pub fn no_slip_gain(kernel: &CubicSpline, spacing: Real) -> Real {
+    let eps = 0.01 * kernel.support() * kernel.support();
+    let reach = (kernel.support() / spacing).ceil() as i64;
+    let plane = |d: Real| plane_kernel_sum_at(kernel, spacing, d * spacing);
+    // The fluid's particle volume (its lattice sums to the rest density) and a flat wall's
+    // sample volume (`compute_volumes` with its own plane's sum P(0)).
+    let volume = 1.0 / lattice_kernel_sum(kernel, spacing);
+    let sample_volume = plane(1.0) / plane(MIRROR_DEPTH + 0.5) * volume;
+    // Eq. 4's pull along x on the first layer (half a spacing off the wall) from a point at
+    // offset x moving at u_x.
+    let first = Vec3::new(0.0, 0.5 * spacing, 0.0);
+    let pull = |offset: Vec3, u: Real| {
+        let x = first - offset;
+        let shear = 0.5 * spacing - u;
+        shear * x[0] * kernel.grad(&x)[0] / (x.norm_squared() + eps)
+    };
+    let (mut lattice, mut wall) = (0.0, 0.0);
+    for a in -reach..=reach {
+        for c in -reach..=reach {
+            let (ax, cz) = (a as Real * spacing, c as Real * spacing);
+            for b in 1..=reach {
+                let y = 0.5 * spacing - b as Real * spacing;
+                lattice += volume * pull(Vec3::new(ax, y, cz), y);
+            }
+            wall += sample_volume * pull(Vec3::new(ax, -MIRROR_DEPTH * spacing, cz), 0.0);
+        }
+    }
+    lattice / wall
+}
+
 /// All boundary particles of a scene, in cell order.
 #[derive(Debug, Clone)]
 pub struct BoundaryParticles {

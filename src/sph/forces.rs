@@ -1,7 +1,6 @@
 //! Non-pressure forces: gravity, the Laplacian viscosity of Liu et al. 2021 Eq. 4, and XSPH.
 
 use super::neighborhood::Neighborhood;
-use super::Viscosity;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -14,16 +13,17 @@ use rayon::prelude::*;
 pub const VISCOUS_STEP: Real = 0.1;
 
 /// The largest stable step of the explicit viscosity, fluid and walls together
-/// (VISCOUS_STEP spacing^2 / (nu + nu_boundary)); None without viscosity.
-pub fn viscous_step_limit(spacing: Real, viscosity: &Viscosity) -> Option<Real> {
-    let nu = viscosity.kinematic + viscosity.boundary;
+/// (VISCOUS_STEP spacing^2 / (nu + the strongest wall's nu)); None without viscosity.
+pub fn viscous_step_limit(spacing: Real, kinematic: Real, walls: &[Real]) -> Option<Real> {
+    let nu = kinematic + walls.iter().copied().fold(0.0, Real::max);
     (nu > 0.0).then(|| VISCOUS_STEP * spacing * spacing / nu)
 }
 
 /// Viscous acceleration nu * Laplacian(v) at particle i, Liu et al. 2021 Eq. 4 (after Koschier
 /// et al. 2019): 2 (d + 2) sum_j (m_j / rho_j) (v_ij . x_ij) / (|x_ij|^2 + 0.01 h^2) grad W_ij,
-/// d = 3. Boundary samples take part with their Akinci volume and kinematic velocity, with their
-/// own coefficient `nu_boundary` (no-slip strength of the walls).
+/// d = 3. Boundary samples take part with their Akinci volume and kinematic velocity, with
+/// their body's coefficient `walls[body]` (its no-slip strength); `walls` empty when every wall
+/// is free-slip.
 #[inline]
 pub fn viscous_acceleration(
     nb: &Neighborhood,
@@ -32,7 +32,7 @@ pub fn viscous_acceleration(
     v: &[Vec3],
     i: usize,
     nu: Real,
-    nu_boundary: Real,
+    walls: &[Real],
 ) -> Vec3 {
     let k = nb.kernel;
     let eps = 0.01 * k.support() * k.support();
@@ -46,13 +46,15 @@ pub fn viscous_acceleration(
         });
     }
     let mut wall = Vec3::zeros();
-    if nu_boundary > 0.0 {
+    if !walls.is_empty() {
+        let samples = nb.boundary;
         nb.boundary_pairs_grad(i, |b, xib, g| {
-            let vib = vi - nb.boundary.v[b];
-            wall += nb.boundary.volume[b] * vib.dot(&xib) / (xib.norm_squared() + eps) * g;
+            let vib = vi - samples.v[b];
+            let nu_b = walls[samples.body[b] as usize];
+            wall += nu_b * samples.volume[b] * vib.dot(&xib) / (xib.norm_squared() + eps) * g;
         });
     }
-    10.0 * (nu * fluid + nu_boundary * wall)
+    10.0 * (nu * fluid + wall)
 }
 
 /// XSPH velocity smoothing (Monaghan 1989): v_i += eps sum_j (m_j / rho_j) (v_j - v_i) W_ij.

@@ -25,6 +25,7 @@ pub use kernel::CubicSpline;
 pub use neighborhood::Neighborhood;
 pub use neighbors::{CellGrid, NeighborLists};
 pub use params::{
-    DomainSide, FluidBlock, Inflow, Outflow, Pressure, PressureSolverKind, SphParams, Viscosity,
+    DomainSide, FluidBlock, Inflow, InflowShape, Outflow, Pressure, PressureSolverKind, SphParams,
+    Viscosity,
 };
 pub use solver::{Instability, SphSolver, StepStats};

@@ -19,32 +19,29 @@
 use rayon::prelude::*;
 
 use super::fluid::FluidParticles;
-use super::params::{Inflow, Outflow};
+use super::params::{Inflow, InflowShape, Outflow};
 use crate::{Real, Vec3};
 
 /// Depth of an inflow's buffer, in spacings: one more than the kernel support.
 pub const BUFFER_LAYERS: Real = 3.0;
 
-/// One emitter and the offset of the layer it spawned last.
+/// One emitter and, per lattice site, the offset of the particle it spawned last: under a
+/// profile each site spawns at the rate its own speed implies.
 #[derive(Debug, Clone)]
 struct Emitter {
     inflow: Inflow,
     /// The side's coordinate along its axis, m.
     plane: Real,
-    /// Distance from the plane of the last layer spawned, m.
-    last: Real,
-    /// The layer's sites on the plane (the normal coordinate is set when spawning).
+    /// The sites on the plane (the normal coordinate is set when spawning).
     sites: Vec<Vec3>,
+    /// Per site, the distance from the plane of its last particle, m.
+    last: Vec<Real>,
 }
 
 impl Emitter {
-    fn velocity(&self) -> Vec3 {
-        Vec3::from(self.inflow.velocity)
-    }
-
-    /// Speed into the domain, m/s.
-    fn inward_speed(&self) -> Real {
-        self.velocity().dot(&self.inflow.side.inward())
+    /// The prescribed velocity at `x` (the profile's factor times the peak).
+    fn velocity(&self, x: &Vec3) -> Vec3 {
+        self.inflow.factor(x) * Vec3::from(self.inflow.velocity)
     }
 
     /// Distance of `x` from the plane into the domain, if it lies over the rectangle.
@@ -56,15 +53,12 @@ impl Emitter {
         over.then(|| (x[side.axis()] - self.plane) * side.inward()[side.axis()])
     }
 
-    /// The layer at `depth` from the plane.
-    fn layer(&self, depth: Real) -> impl Iterator<Item = (Vec3, Vec3)> + '_ {
-        let (axis, v) = (self.inflow.side.axis(), self.velocity());
-        let x = self.plane + depth * self.inflow.side.inward()[axis];
-        self.sites.iter().map(move |s| {
-            let mut p = *s;
-            p[axis] = x;
-            (p, v)
-        })
+    /// The particle of site `s` at `depth` from the plane, with its velocity.
+    fn particle(&self, s: usize, depth: Real) -> (Vec3, Vec3) {
+        let axis = self.inflow.side.axis();
+        let mut p = self.sites[s];
+        p[axis] = self.plane + depth * self.inflow.side.inward()[axis];
+        (p, self.velocity(&p))
     }
 }
 
@@ -108,8 +102,8 @@ impl OpenBoundaries {
                 let mut e = Emitter {
                     inflow: inflow.clone(),
                     plane: plane(side.axis(), side.is_max()),
-                    last: Real::INFINITY,
                     sites: Vec::new(),
+                    last: Vec::new(),
                 };
                 for j in 0..count(1) {
                     for i in 0..count(0) {
@@ -119,10 +113,13 @@ impl OpenBoundaries {
                         e.sites.push(s);
                     }
                 }
-                let first: Vec<Vec3> = e.layer(0.5 * spacing).map(|(x, _)| x).collect();
+                let first: Vec<Vec3> = (0..e.sites.len())
+                    .map(|s| e.particle(s, 0.5 * spacing).0)
+                    .collect();
                 let mut at = first.iter();
                 e.sites
                     .retain(|_| keep(at.next().expect("one position per site")));
+                e.last = vec![Real::INFINITY; e.sites.len()];
                 if e.sites.is_empty() {
                     tracing::warn!(
                         "the inflow on {} has no lattice site clear of the walls: no fluid \
@@ -156,23 +153,26 @@ impl OpenBoundaries {
         let h = self.spacing;
         let mut added = Vec::new();
         for e in &mut self.emitters {
-            e.last = fluid
+            let nearest = fluid
                 .x
                 .iter()
                 .filter_map(|x| e.depth(x))
                 .filter(|d| (0.0..h).contains(d))
                 .fold(Real::INFINITY, Real::min);
-            if e.last.is_infinite() {
-                e.last = 0.5 * h;
-                added.extend(e.layer(e.last));
-            }
+            let depth = if nearest.is_infinite() {
+                added.extend((0..e.sites.len()).map(|s| e.particle(s, 0.5 * h)));
+                0.5 * h
+            } else {
+                nearest
+            };
+            e.last.fill(depth);
         }
         if !added.is_empty() {
             fluid.exchange(&vec![true; fluid.len()], &added);
         }
     }
 
-    /// Sets the velocity of every particle in an inflow's buffer to the inflow's.
+    /// Sets the velocity of every particle in an inflow's buffer to the inflow's there.
     pub fn impose(&self, x: &[Vec3], v: &mut [Vec3]) {
         if self.emitters.is_empty() {
             return;
@@ -181,7 +181,7 @@ impl OpenBoundaries {
         x.par_iter().zip(v.par_iter_mut()).for_each(|(x, v)| {
             for e in &self.emitters {
                 if e.depth(x).is_some_and(|d| d < depth) {
-                    *v = e.velocity();
+                    *v = e.velocity(x);
                 }
             }
         });
@@ -196,10 +196,13 @@ impl OpenBoundaries {
         let h = self.spacing;
         let mut added = Vec::new();
         for e in &mut self.emitters {
-            e.last += e.inward_speed() * dt;
-            while e.last >= 1.5 * h {
-                e.last -= h;
-                added.extend(e.layer(e.last));
+            let inward = e.inflow.side.inward();
+            for s in 0..e.sites.len() {
+                e.last[s] += e.velocity(&e.sites[s]).dot(&inward) * dt;
+                while e.last[s] >= 1.5 * h {
+                    e.last[s] -= h;
+                    added.push(e.particle(s, e.last[s]));
+                }
             }
         }
         let keep: Vec<bool> = fluid
@@ -229,8 +232,16 @@ impl OpenBoundaries {
             .emitters
             .iter()
             .map(|e| {
+                let shape = match (e.inflow.shape, e.inflow.across) {
+                    (InflowShape::Uniform, _) => String::new(),
+                    (InflowShape::Plane, Some(a)) => {
+                        format!(" peak, plane profile across axis {a}")
+                    }
+                    (shape, _) => format!(" peak, {shape:?} profile").to_lowercase(),
+                };
                 format!(
-                    "inflow on {} at {:?} m/s ({} sites a layer, buffer {BUFFER_LAYERS} spacings)",
+                    "inflow on {} at {:?} m/s{shape} ({} sites a layer, buffer {BUFFER_LAYERS} \
+                     spacings)",
                     e.inflow.side.name(),
                     e.inflow.velocity,
                     e.sites.len()

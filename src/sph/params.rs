@@ -20,6 +20,9 @@ pub struct SphParams {
     pub gravity: Vec3,
     pub pressure: Pressure,
     pub viscosity: Viscosity,
+    /// Per body (the container first): the kinematic viscosity against its samples, m^2/s
+    /// (the body's `wall_viscosity`, else `viscosity.boundary`).
+    pub wall_viscosity: Vec<Real>,
     pub limits: StepLimits,
     /// Lower and upper corner of the domain, m: a particle that leaves it is an instability.
     pub domain: (Vec3, Vec3),
@@ -98,8 +101,50 @@ pub struct Inflow {
     pub min: [Real; 2],
     /// Upper corner, m.
     pub max: [Real; 2],
-    /// Velocity of the entering fluid, m/s; its component into the domain must be positive.
+    /// Velocity of the entering fluid, m/s (the peak of a profile); its component into the
+    /// domain must be positive.
     pub velocity: [Real; 3],
+    /// How the velocity varies over the rectangle: `uniform` (default), `plane` or `duct`.
+    #[serde(default)]
+    pub shape: InflowShape,
+    /// `plane`: the axis (0, 1, 2 for x, y, z) along the side the parabola runs across.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub across: Option<usize>,
+}
+
+/// How an inflow's velocity varies over its rectangle (s, t: the position across it along
+/// its two axes, from 0 to 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InflowShape {
+    /// The same velocity everywhere.
+    #[default]
+    Uniform,
+    /// Plane Poiseuille flow between the rectangle's edges normal to `across`: 4 s (1 - s),
+    /// mean 2/3 of the peak (the inflow of Schaefer & Turek's 1996 cylinder benchmark).
+    Plane,
+    /// The product of both parabolas, 16 s (1 - s) t (1 - t), mean 4/9 of the peak.
+    Duct,
+}
+
+impl Inflow {
+    /// The velocity's factor at `x` over the rectangle.
+    pub fn factor(&self, x: &Vec3) -> Real {
+        let tangents = self.side.tangents();
+        let parabola = |k: usize| {
+            let a = tangents[k];
+            let s = ((x[a] - self.min[k]) / (self.max[k] - self.min[k])).clamp(0.0, 1.0);
+            4.0 * s * (1.0 - s)
+        };
+        match self.shape {
+            InflowShape::Uniform => 1.0,
+            InflowShape::Plane => tangents
+                .iter()
+                .position(|&a| Some(a) == self.across)
+                .map_or(1.0, parabola),
+            InflowShape::Duct => parabola(0) * parabola(1),
+        }
+    }
 }
 
 /// An outflow side: particles that cross it leave the simulation.
@@ -199,7 +244,8 @@ pub struct Viscosity {
     /// Kinematic viscosity of the Laplacian form (Liu et al. 2021 Eq. 4), m^2/s.
     #[serde(default)]
     pub kinematic: Real,
-    /// Kinematic viscosity against boundary particles, m^2/s.
+    /// Kinematic viscosity against boundary particles, m^2/s: the walls' no-slip strength,
+    /// for every body that does not set its own `wall_viscosity`.
     #[serde(default)]
     pub boundary: Real,
     /// XSPH velocity smoothing factor in [0, 1].

@@ -112,6 +112,9 @@ pub struct SphSolver {
     ran: Vec<&'static str>,
     /// Inflow emitters and outflow sides.
     open: OpenBoundaries,
+    /// Per body, the viscosity Eq. 4 applies over its samples: its `wall_viscosity` times
+    /// [`super::boundary::no_slip_gain`]; empty when every wall is free-slip.
+    wall_viscosity: Vec<Real>,
 }
 
 impl SphSolver {
@@ -153,6 +156,13 @@ impl SphSolver {
         );
         open.prime(&mut fluid);
         let boundary = BoundaryParticles::sample(&bodies, params.container, spacing, &kernel, 0.0);
+        let no_slip = super::boundary::no_slip_gain(&kernel, spacing);
+        let walls = &params.wall_viscosity;
+        let wall_viscosity = if walls.iter().any(|&w| w > 0.0) {
+            walls.iter().map(|w| w * no_slip).collect()
+        } else {
+            Vec::new()
+        };
         let n = fluid.len();
         let mut me = Self {
             kernel,
@@ -175,6 +185,7 @@ impl SphSolver {
             refine_volume: Vec::new(),
             ran: Vec::new(),
             open,
+            wall_viscosity,
         };
         me.update_neighborhoods();
         me
@@ -282,7 +293,9 @@ impl SphSolver {
             None => self.non_pressure_accelerations(),
         };
         let limits = &self.params.limits;
-        let viscous = forces::viscous_step_limit(self.spacing, &self.params.viscosity);
+        let p = &self.params;
+        let viscous =
+            forces::viscous_step_limit(self.spacing, p.viscosity.kinematic, &p.wall_viscosity);
         let dt = step_size(limits, viscous, self.spacing, &self.fluid.v, &accel).map_err(
             |(needed, speed)| Instability::CflLimit {
                 time: self.time,
@@ -484,11 +497,19 @@ impl SphSolver {
         out.extend(self.hooks.iter().map(|h| (h.name(), h.describe())));
         let v = &p.viscosity;
         let mut forces = format!("gravity {:?}", p.gravity.as_slice());
-        if let Some(limit) = forces::viscous_step_limit(self.spacing, v) {
+        let walls = &p.wall_viscosity;
+        if let Some(limit) = forces::viscous_step_limit(self.spacing, v.kinematic, walls) {
+            let walls = match walls.split_first() {
+                Some((first, rest)) if rest.iter().any(|w| w != first) => {
+                    format!("{walls:?} by body")
+                }
+                Some((first, _)) => first.to_string(),
+                None => "none".into(),
+            };
             forces += &format!(
-                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {} (explicit: \
+                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {walls} (explicit: \
                  steps of at most {limit:.3e} s)",
-                v.kinematic, v.boundary
+                v.kinematic
             );
         }
         if v.xsph > 0.0 {
@@ -566,15 +587,16 @@ impl SphSolver {
         self.hooks.iter().flat_map(|h| h.fields()).collect()
     }
 
-    /// Gravity plus viscosity on the current state.
-    fn non_pressure_accelerations(&self) -> Vec<Vec3> {
+    /// Gravity plus viscosity on the current state, per fluid particle.
+    pub fn non_pressure_accelerations(&self) -> Vec<Vec3> {
         non_pressure_accelerations(
             &self.neighborhood(),
             &self.fluid.density,
             self.fluid.rest_density,
             &self.fluid.v,
             self.params.gravity,
-            &self.params.viscosity,
+            self.params.viscosity.kinematic,
+            &self.wall_viscosity,
         )
     }
 
@@ -673,23 +695,15 @@ fn non_pressure_accelerations(
     rest_density: Real,
     v: &[Vec3],
     gravity: Vec3,
-    viscosity: &super::Viscosity,
+    nu: Real,
+    walls: &[Real],
 ) -> Vec<Vec3> {
-    let viscous = viscosity.kinematic > 0.0 || viscosity.boundary > 0.0;
+    let viscous = nu > 0.0 || !walls.is_empty();
     (0..v.len())
         .into_par_iter()
         .map(|i| {
             if viscous {
-                gravity
-                    + forces::viscous_acceleration(
-                        nb,
-                        density,
-                        rest_density,
-                        v,
-                        i,
-                        viscosity.kinematic,
-                        viscosity.boundary,
-                    )
+                gravity + forces::viscous_acceleration(nb, density, rest_density, v, i, nu, walls)
             } else {
                 gravity
             }

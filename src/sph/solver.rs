@@ -156,10 +156,17 @@ impl SphSolver {
         );
         open.prime(&mut fluid);
         let boundary = BoundaryParticles::sample(&bodies, params.container, spacing, &kernel, 0.0);
+        // One value per body: a body `params.wall_viscosity` does not cover takes
+        // `viscosity.boundary`, as a scene's body without its own value does.
         let no_slip = super::boundary::no_slip_gain(&kernel, spacing);
-        let walls = &params.wall_viscosity;
+        let walls: Vec<Real> = (0..bodies.len())
+            .map(|b| {
+                let nu = params.wall_viscosity.get(b);
+                no_slip * nu.copied().unwrap_or(params.viscosity.boundary)
+            })
+            .collect();
         let wall_viscosity = if walls.iter().any(|&w| w > 0.0) {
-            walls.iter().map(|w| w * no_slip).collect()
+            walls
         } else {
             Vec::new()
         };

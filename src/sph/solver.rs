@@ -156,17 +156,18 @@ impl SphSolver {
         );
         open.prime(&mut fluid);
         let boundary = BoundaryParticles::sample(&bodies, params.container, spacing, &kernel, 0.0);
-        // One value per body: a body `params.wall_viscosity` does not cover takes
-        // `viscosity.boundary`, as a scene's body without its own value does.
-        let no_slip = super::boundary::no_slip_gain(&kernel, spacing);
-        let walls: Vec<Real> = (0..bodies.len())
-            .map(|b| {
-                let nu = params.wall_viscosity.get(b);
-                no_slip * nu.copied().unwrap_or(params.viscosity.boundary)
-            })
+        // One value per body, so the step bound, the plan and the forces read the same walls:
+        // a body `params.wall_viscosity` does not cover takes `viscosity.boundary`, as a
+        // scene's body without its own value does.
+        let mut params = params.clone();
+        let given = std::mem::take(&mut params.wall_viscosity);
+        params.wall_viscosity = (0..bodies.len())
+            .map(|b| given.get(b).copied().unwrap_or(params.viscosity.boundary))
             .collect();
+        let no_slip = super::boundary::no_slip_gain(&kernel, spacing);
+        let walls = &params.wall_viscosity;
         let wall_viscosity = if walls.iter().any(|&w| w > 0.0) {
-            walls
+            walls.iter().map(|w| no_slip * w).collect()
         } else {
             Vec::new()
         };
@@ -177,7 +178,7 @@ impl SphSolver {
             boundary,
             bodies,
             spacing,
-            params: params.clone(),
+            params,
             grid: CellGrid::build(&[], 2.0 * spacing),
             fluid_lists: NeighborLists::default(),
             boundary_lists: NeighborLists::default(),

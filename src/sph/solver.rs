@@ -474,10 +474,12 @@ impl SphSolver {
 
     /// One line on the fluid as built, for `eddy run --plan`.
     pub fn summary(&self) -> String {
-        let moving = self.bodies.iter().filter(|b| b.is_moving()).count();
+        let moving = match self.bodies.iter().filter(|b| b.is_moving()).count() {
+            0 => "all still".to_string(),
+            n => format!("{n} moving: re-placed every step"),
+        };
         format!(
-            "SPH fluid of {} particles at {} m, {} Akinci boundary samples on {} bodies ({moving} \
-             moving: re-placed every step)",
+            "SPH fluid of {} particles at {} m, {} Akinci boundary samples on {} bodies ({moving})",
             self.fluid.len(),
             self.spacing,
             self.boundary.len(),

@@ -326,6 +326,12 @@ fn out_of_range_values() {
     let m = message(parse(&text));
     assert_contains(&m, &["`pressure.min_iterations`", "= 0", "[1, 100]"]);
 
+    let m = message(parse_with(
+        MINIMAL,
+        &["pressure.solver=iisph", "pressure.signed=true"],
+    ));
+    assert_contains(&m, &["`pressure.signed`", "true", "iisph", "DFSPH"]);
+
     let text = format!("{MINIMAL}[[probes]]\ntype = \"front\"\nname = \"a b\"\naxis = \"x\"\n");
     let m = message(parse(&text));
     assert_contains(&m, &["`probes[0].name`", "\"a b\""]);

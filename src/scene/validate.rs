@@ -179,6 +179,14 @@ impl Scene {
             Interval::closed(1.0, Real::from(p.max_iterations))
                 .note("1 to `pressure.max_iterations`"),
         )?;
+        if p.signed && p.solver != crate::sph::PressureSolverKind::Dfsph {
+            return Err(c.invalid(
+                "pressure.signed",
+                true,
+                "false with `pressure.solver = \"iisph\"`: signed pressure is a DFSPH solve",
+            ));
+        }
+        c.num("pressure.ambient", p.ambient, Interval::ge(0.0))?;
         let v = &self.viscosity;
         c.num("viscosity.kinematic", v.kinematic, Interval::ge(0.0))?;
         c.num("viscosity.boundary", v.boundary, Interval::ge(0.0))?;

@@ -2,6 +2,7 @@
 //! Akinci boundary particles, viscosity.
 
 pub mod boundary;
+pub mod cg;
 pub mod dfsph;
 pub mod fluid;
 pub mod forces;

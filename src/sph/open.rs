@@ -14,7 +14,8 @@
 //! **Outflow: removal at the plane.** A particle that crosses the side's plane is removed. Ahead
 //! of the plane the fluid thins as at a free surface: pressure is clamped at zero there, so it
 //! neither sucks the fluid nor sends a wave back when a particle goes (the p = 0 outflow of a
-//! grid's open side).
+//! grid's open side). The signed solve (`super::cg`) holds the pressure at zero within a kernel
+//! support of the plane, and treats the inflow buffer as a moving wall.
 
 use rayon::prelude::*;
 
@@ -177,14 +178,33 @@ impl OpenBoundaries {
         if self.emitters.is_empty() {
             return;
         }
-        let depth = BUFFER_LAYERS * self.spacing;
         x.par_iter().zip(v.par_iter_mut()).for_each(|(x, v)| {
-            for e in &self.emitters {
-                if e.depth(x).is_some_and(|d| d < depth) {
-                    *v = e.velocity(x);
-                }
+            if let Some(e) = self.buffer_of(x) {
+                *v = e.velocity(x);
             }
         });
+    }
+
+    /// The last emitter whose buffer holds `x` (the one [`Self::impose`] takes the velocity of).
+    fn buffer_of(&self, x: &Vec3) -> Option<&Emitter> {
+        let depth = BUFFER_LAYERS * self.spacing;
+        self.emitters
+            .iter()
+            .rev()
+            .find(|e| e.depth(x).is_some_and(|d| d < depth))
+    }
+
+    /// Whether `x` lies in an inflow's buffer, where the velocity is prescribed.
+    pub fn in_buffer(&self, x: &Vec3) -> bool {
+        self.buffer_of(x).is_some()
+    }
+
+    /// Whether `x` lies within `reach` of an outflow plane, inside the domain.
+    pub fn near_outflow(&self, x: &Vec3, reach: Real) -> bool {
+        self.outflows.iter().any(|(o, plane)| {
+            let axis = o.side.axis();
+            (x[axis] - plane) * o.side.inward()[axis] < reach
+        })
     }
 
     /// After the positions moved by `dt`: removes the particles beyond an outflow plane and

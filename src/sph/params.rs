@@ -199,6 +199,17 @@ pub struct Pressure {
     /// so the measured compression stays at the tolerance; costs a Hessian pass per iteration.
     #[serde(default)]
     pub second_order: bool,
+    /// DFSPH: let the pressure go negative, so the fluid can pull as well as push, and solve
+    /// both systems by conjugate gradients (`super::cg`). For fluids that fill their walls
+    /// (channels, wakes): the clamped default lets a wake cavitate. Particles at a free surface
+    /// (fewer than 20 neighbours) are held at zero pressure.
+    #[serde(default)]
+    pub signed: bool,
+    /// The signed solve's pressure at the outflows, Pa. Set it above the flow's deepest
+    /// suction (some rho U^2 for a body in a stream of speed U): where the pressure is
+    /// negative SPH particles clump (the tensile instability).
+    #[serde(default)]
+    pub ambient: Real,
     /// Least iterations per solve.
     #[serde(default = "default_min_iterations")]
     pub min_iterations: u32,
@@ -215,6 +226,8 @@ impl Default for Pressure {
             divergence_tolerance: default_divergence_tolerance(),
             divergence_solver: true,
             second_order: false,
+            signed: false,
+            ambient: 0.0,
             min_iterations: default_min_iterations(),
             max_iterations: default_max_iterations(),
         }

@@ -9,6 +9,7 @@
 //! 2017, Algorithm 1.
 
 use super::boundary::BoundaryParticles;
+use super::cg;
 use super::dfsph::{self, Bounds, Solve, SolveResult};
 use super::fluid::FluidParticles;
 use super::forces;
@@ -227,6 +228,21 @@ impl SphSolver {
         }
     }
 
+    /// rho / rho_0 per fluid particle, from the last neighbourhood update.
+    pub fn density_ratios(&self) -> &[Real] {
+        &self.density_ratio
+    }
+
+    /// The DFSPH factors of the last neighbourhood update (see [`super::pair_cache`]).
+    pub fn factors(&self) -> &[Real] {
+        &self.factor
+    }
+
+    /// The inflow emitters and outflow sides.
+    pub fn open_boundaries(&self) -> &OpenBoundaries {
+        &self.open
+    }
+
     /// The grid over the fluid particles (valid after [`Self::update_neighborhoods`]).
     pub fn grid(&self) -> &CellGrid {
         &self.grid
@@ -351,6 +367,42 @@ impl SphSolver {
         };
         let settings = &self.params.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
+        let roles = if dfsph && settings.signed {
+            cg::roles(&nb, &self.open)
+        } else {
+            Vec::new()
+        };
+        let dfsph_solve = |which, v: &mut [Vec3], warm: &mut [Real], bounds, second_order| {
+            let args = (&self.density_ratio, &self.factor);
+            if settings.signed {
+                let held = settings.ambient / rho0 * dt * dt;
+                cg::solve(
+                    &nb,
+                    which,
+                    &roles,
+                    held,
+                    args.0,
+                    args.1,
+                    v,
+                    warm,
+                    dt,
+                    bounds,
+                    second_order,
+                )
+            } else {
+                dfsph::solve(
+                    &nb,
+                    which,
+                    args.0,
+                    args.1,
+                    v,
+                    warm,
+                    dt,
+                    bounds,
+                    second_order,
+                )
+            }
+        };
         let bounds = |tolerance| Bounds {
             tolerance,
             min_iterations: settings.min_iterations,
@@ -371,14 +423,10 @@ impl SphSolver {
         self.last_dt = Some(dt);
         if dfsph && settings.divergence_solver {
             let start = Instant::now();
-            stats.divergence = dfsph::solve(
-                &nb,
+            stats.divergence = dfsph_solve(
                 Solve::Divergence,
-                &self.density_ratio,
-                &self.factor,
                 v,
                 kappa_v,
-                dt,
                 bounds(settings.divergence_tolerance),
                 false,
             );
@@ -413,14 +461,10 @@ impl SphSolver {
         let start = Instant::now();
         ran.push("pressure");
         stats.pressure = if dfsph {
-            dfsph::solve(
-                &nb,
+            dfsph_solve(
                 Solve::Density,
-                &self.density_ratio,
-                &self.factor,
                 v,
                 kappa,
-                dt,
                 pressure_bounds,
                 settings.second_order,
             )
@@ -495,12 +539,20 @@ impl SphSolver {
         let mut out = Vec::new();
         let settings = &p.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
+        let signed = if settings.signed {
+            format!(
+                " (signed pressure, conjugate gradients; outflows held at {} Pa)",
+                settings.ambient
+            )
+        } else {
+            String::new()
+        };
         if dfsph && settings.divergence_solver {
             out.push((
                 "divergence",
                 format!(
-                    "DFSPH divergence solve, tolerance {}",
-                    settings.divergence_tolerance
+                    "DFSPH divergence solve{}, tolerance {}",
+                    signed, settings.divergence_tolerance
                 ),
             ));
         }
@@ -529,8 +581,9 @@ impl SphSolver {
         out.push((
             "pressure",
             format!(
-                "{} density solve, tolerance {} ({} to {} iterations){}",
+                "{} density solve{}, tolerance {} ({} to {} iterations){}",
                 if dfsph { "DFSPH" } else { "IISPH" },
+                signed,
                 settings.density_tolerance,
                 settings.min_iterations,
                 settings.max_iterations,

@@ -14,8 +14,8 @@
 //! **Outflow: removal at the plane.** A particle that crosses the side's plane is removed. Ahead
 //! of the plane the fluid thins as at a free surface: pressure is clamped at zero there, so it
 //! neither sucks the fluid nor sends a wave back when a particle goes (the p = 0 outflow of a
-//! grid's open side). The signed solve (`super::cg`) holds the pressure at zero within a kernel
-//! support of the plane, and treats the inflow buffer as a moving wall.
+//! grid's open side). The signed solve (`super::cg`) holds the pressure at its ambient value
+//! within a kernel support of the plane, and treats the inflow buffer as a moving wall.
 
 use rayon::prelude::*;
 

@@ -201,8 +201,8 @@ pub struct Pressure {
     pub second_order: bool,
     /// DFSPH: let the pressure go negative, so the fluid can pull as well as push, and solve
     /// both systems by conjugate gradients (`super::cg`). For fluids that fill their walls
-    /// (channels, wakes): the clamped default lets a wake cavitate. Particles at a free surface
-    /// (fewer than 20 neighbours) are held at zero pressure.
+    /// (channels, wakes): the clamped default lets a wake cavitate. There is no free-surface
+    /// rule, so a free surface would pull itself together; outflows are held at `ambient`.
     #[serde(default)]
     pub signed: bool,
     /// The signed solve's pressure at the outflows, Pa. Set it above the flow's deepest

@@ -367,42 +367,31 @@ impl SphSolver {
         };
         let settings = &self.params.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
-        let roles = if dfsph && settings.signed {
-            cg::roles(&nb, &self.open)
-        } else {
-            Vec::new()
-        };
-        let dfsph_solve = |which, v: &mut [Vec3], warm: &mut [Real], bounds, second_order| {
-            let args = (&self.density_ratio, &self.factor);
-            if settings.signed {
-                let held = settings.ambient / rho0 * dt * dt;
-                cg::solve(
+        // The signed solve's roles and the stiffness it holds at the outflows (as k dt^2).
+        let signed = (dfsph && settings.signed).then(|| {
+            (
+                cg::roles(&nb, &self.open),
+                settings.ambient / rho0 * dt * dt,
+            )
+        });
+        let (ratio, factor) = (&self.density_ratio, &self.factor);
+        let dfsph_solve =
+            |which, v: &mut [Vec3], warm: &mut [Real], bounds, second_order| match &signed {
+                Some((roles, held)) => cg::solve(
                     &nb,
                     which,
-                    &roles,
-                    held,
-                    args.0,
-                    args.1,
+                    roles,
+                    *held,
+                    ratio,
+                    factor,
                     v,
                     warm,
                     dt,
                     bounds,
                     second_order,
-                )
-            } else {
-                dfsph::solve(
-                    &nb,
-                    which,
-                    args.0,
-                    args.1,
-                    v,
-                    warm,
-                    dt,
-                    bounds,
-                    second_order,
-                )
-            }
-        };
+                ),
+                None => dfsph::solve(&nb, which, ratio, factor, v, warm, dt, bounds, second_order),
+            };
         let bounds = |tolerance| Bounds {
             tolerance,
             min_iterations: settings.min_iterations,

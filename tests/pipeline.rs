@@ -280,6 +280,7 @@ fn solvers_build_from_parameters_alone() {
         origin: Vec3::zeros(),
         initial_velocity: v,
         sides: std::array::from_fn(|_| [GridSide::Periodic, GridSide::Periodic]),
+        inflow_turbulence: None,
         advection: Default::default(),
         reflection: false,
         viscosity_scheme: Default::default(),

@@ -65,6 +65,7 @@ pub fn grid(
         origin: grid_box.origin(),
         initial_velocity,
         sides: std::array::from_fn(|_| [side.clone(), side.clone()]),
+        inflow_turbulence: None,
         advection: g.advection,
         reflection: false,
         viscosity_scheme: ViscosityScheme::BackwardEuler,

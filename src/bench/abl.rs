@@ -43,8 +43,9 @@ pub struct AblBenchOptions {
     /// Draw the U and k errors against wall time and the U profiles at the middle station into
     /// this PNG.
     pub plot: Option<PathBuf>,
-    /// Seeding is random: the `random` and `abl` runs are repeated with this many scene seeds
-    /// (the scene's, then the next ones), one row each, and summarised by label.
+    /// Seeding is random: the `random` and `abl` runs (and `none` too when the scene's inflow
+    /// fluctuates, `grid.inflow_turbulence`) are repeated with this many scene seeds (the
+    /// scene's, then the next ones), one row each, and summarised by label.
     pub seeds: u64,
 }
 
@@ -238,7 +239,17 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
                 })
                 .collect()
         };
-    let configs: Vec<(&'static str, Scene)> = std::iter::once(("none", Ok(plain(base.clone()))))
+    // The plain run is random only through a fluctuating inflow: then it is repeated per seed
+    // too, so every label sees the same inflows.
+    let gusty = grid.inflow_turbulence.is_some();
+    let none: Vec<_> = if gusty {
+        seeded("none", Vec::new())
+    } else {
+        vec![("none", load(&[]))]
+    };
+    let configs: Vec<(&'static str, Scene)> = none
+        .into_iter()
+        .map(|(l, r)| (l, r.map(plain)))
         .chain(seeded("random", vec!["turbulence.seeding=random".into()]))
         .chain(seeded("abl", Vec::new()))
         .collect::<Vec<_>>()
@@ -275,9 +286,15 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     if let Some(dir) = &options.profiles {
         std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, "creating", e))?;
         for (row, prof) in rows.iter().zip(&profiles) {
-            let name = match (options.seeds > 1, row.label) {
-                (true, "random" | "abl") => format!("{}_seed{}.csv", row.label, row.seed),
-                _ => format!("{}.csv", row.label),
+            let repeated = match row.label {
+                "random" | "abl" => true,
+                "none" => gusty,
+                _ => false,
+            };
+            let name = if repeated && options.seeds > 1 {
+                format!("{}_seed{}.csv", row.label, row.seed)
+            } else {
+                format!("{}.csv", row.label)
             };
             write_profiles(&dir.join(name), prof, &options.stations, coarse.0)?;
         }
@@ -430,21 +447,24 @@ pub fn table(rows: &[AblBenchRow]) -> String {
             r.k_error
         ));
     }
-    for label in ["random", "abl"] {
-        let runs: Vec<&AblBenchRow> = rows.iter().filter(|r| r.label == label).collect();
-        let errors: Vec<Real> = runs
+    for label in ["none", "random", "abl"] {
+        let runs: Vec<&AblBenchRow> = rows
             .iter()
-            .map(|r| r.u_error)
-            .filter(|e| e.is_finite())
+            .filter(|r| r.label == label && r.u_error.is_finite())
             .collect();
-        if errors.len() > 1 {
-            let mean = errors.iter().sum::<Real>() / errors.len() as Real;
-            let (lo, hi) = errors
-                .iter()
-                .fold((Real::MAX, Real::MIN), |(a, b), &e| (a.min(e), b.max(e)));
+        if runs.len() > 1 {
+            let spread = |e: &dyn Fn(&AblBenchRow) -> Real| {
+                let mean = runs.iter().map(|r| e(r)).sum::<Real>() / runs.len() as Real;
+                let (lo, hi) = runs.iter().fold((Real::MAX, Real::MIN), |(a, b), r| {
+                    (a.min(e(r)), b.max(e(r)))
+                });
+                format!("{mean:.4} (mean), {lo:.4} to {hi:.4}")
+            };
             out.push_str(&format!(
-                "\n{label}: U error over {} seeds {mean:.4} (mean), {lo:.4} to {hi:.4}",
-                errors.len()
+                "\n{label} over {} seeds: U error {}; k error {}",
+                runs.len(),
+                spread(&|r| r.u_error),
+                spread(&|r| r.k_error)
             ));
         }
     }

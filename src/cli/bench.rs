@@ -113,7 +113,8 @@ pub struct AblBenchArgs {
     /// Draw the errors against wall time and the middle station's U profiles into this PNG.
     #[arg(long, value_name = "PNG")]
     pub plot: Option<PathBuf>,
-    /// Repeat the random and abl runs with this many scene seeds (at least 1).
+    /// Repeat the random and abl runs (and the plain one when the inflow fluctuates) with this
+    /// many scene seeds (at least 1).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub seeds: u64,
 }

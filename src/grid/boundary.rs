@@ -7,6 +7,7 @@ use ndarray::{s, Array3, Axis, Zip};
 use rayon::prelude::*;
 
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
+use super::inflow_turbulence::InflowModes;
 use super::liquid::Liquid;
 use super::mac::{cells_beside_face, MacGrid};
 use super::params::GridSide;
@@ -206,6 +207,47 @@ impl Boundaries {
             }
         }
         grid.sync_periodic();
+    }
+
+    /// Sets the normal velocity of every inflow face not covered by an obstacle to the side's
+    /// value plus the fluctuation of `modes` at time `t` (see [`InflowModes`]); [`Self::apply`]
+    /// then writes it onto the grid.
+    pub fn fluctuate_inflow(&mut self, grid: &MacGrid, modes: &InflowModes, t: Real) {
+        let (lo, hi) = (
+            grid.origin,
+            grid.origin + Vec3::from(grid.dims.map(|d| d as Real)) * grid.dx,
+        );
+        for a in 0..3 {
+            for (s, side) in self.sides[a].iter().enumerate() {
+                if side.inflow_peak().is_none() {
+                    continue;
+                }
+                let (face, cell) = if s == 0 {
+                    (0, 0)
+                } else {
+                    (grid.dims[a], grid.dims[a] - 1)
+                };
+                let owner = self.owner.index_axis(Axis(a), cell);
+                let plane = self.fixed_value[a].index_axis_mut(Axis(a), face);
+                Zip::indexed(plane)
+                    .and(owner)
+                    .par_for_each(|(j, k), value, &o| {
+                        if o != FLUID && o != LIQUID {
+                            return;
+                        }
+                        // The plane drops axis `a`; the other two keep their order.
+                        let idx = match a {
+                            0 => [face, j, k],
+                            1 => [j, face, k],
+                            _ => [j, k, face],
+                        };
+                        let x = grid.face_center(a, idx);
+                        if let Some(base) = side.velocity_at(&x, &lo, &hi, a) {
+                            *value = modes.normal_velocity(&base, a, &x, t);
+                        }
+                    });
+            }
+        }
     }
 
     /// Replaces the velocity on faces inside static obstacles by the mean of their neighbours

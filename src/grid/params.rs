@@ -27,6 +27,9 @@ pub struct GridParams {
     pub initial_velocity: Vec3,
     /// What lies beyond each side, `[axis][0 = min, 1 = max]`.
     pub sides: [[GridSide; 2]; 3],
+    /// Fluctuations on the inflow sides' normal velocity, with the modes drawn from the
+    /// scene's seed; none when None.
+    pub inflow_turbulence: Option<super::InflowModes>,
     pub advection: Advection,
     /// Advection–reflection (Zehnder et al. 2018): two half-step projections per step.
     pub reflection: bool,

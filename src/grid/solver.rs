@@ -237,6 +237,11 @@ impl GridSolver {
                 self.rebuild_boundaries(self.time + dt);
             }
         }
+        if let Some(modes) = &self.params.inflow_turbulence {
+            self.ran.push("inflow");
+            self.bounds
+                .fluctuate_inflow(&self.mac, modes, self.time + dt);
+        }
 
         let t0 = Instant::now();
         let scheme = self.params.advection;
@@ -411,6 +416,17 @@ impl GridSolver {
             out.push((
                 "obstacles",
                 format!("{moving} moving obstacles re-voxelised every step"),
+            ));
+        }
+        if let Some(modes) = &p.inflow_turbulence {
+            let s = &modes.spec;
+            out.push((
+                "inflow",
+                format!(
+                    "inflow turbulence: {} random modes, intensity {} of the inflow speed, \
+                     eddy size {} m, carried at the inflow velocity",
+                    s.modes, s.intensity, s.length
+                ),
             ));
         }
         let scheme = match p.advection {

@@ -5,7 +5,7 @@ use super::Scene;
 use crate::abl::AblSettings;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
-use crate::grid::{GridError, GridParams, GridSolver};
+use crate::grid::{GridError, GridParams, GridSolver, InflowModes};
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
 use crate::{Real, Vec3};
@@ -76,6 +76,10 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
         origin: Vec3::from(scene.domain.min),
         initial_velocity: Vec3::from(grid.initial_velocity),
         sides: grid.boundary.sides(),
+        inflow_turbulence: grid
+            .inflow_turbulence
+            .as_ref()
+            .map(|t| InflowModes::new(t, scene.seed)),
         advection: grid.advection,
         reflection: grid.reflection,
         viscosity_scheme: grid.viscosity_scheme,

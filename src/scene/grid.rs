@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use super::validate::{Checker, Interval};
 use super::{Number, Scene, SceneError, Shape};
-pub use crate::grid::{Advection, GridBoundary, GridSide, Smoke, SmokeSource, ViscosityScheme};
+pub use crate::grid::{
+    Advection, GridBoundary, GridSide, InflowTurbulence, Smoke, SmokeSource, ViscosityScheme,
+};
 use crate::Real;
 
 /// Largest number of cells: 1024^3 would need 25 GiB for the velocity alone.
@@ -35,6 +37,11 @@ pub struct Grid {
     /// What lies beyond each side of the domain (all no-slip walls by default).
     #[serde(default)]
     pub boundary: GridBoundary,
+    /// Synthetic turbulence on the inflow sides (`intensity`, `length`, `modes`; see
+    /// [`InflowTurbulence`]): random Fourier modes carried in at the inflow velocity, drawn
+    /// from the scene's seed. None when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inflow_turbulence: Option<InflowTurbulence>,
     /// Fluid density, kg/m^3; scales pressures and forces only (default 1).
     #[serde(default = "default_grid_density")]
     pub density: Real,
@@ -271,6 +278,9 @@ impl Scene {
             }
         }
         self.check_net_inflow(c, &sides)?;
+        if let Some(t) = &grid.inflow_turbulence {
+            check_inflow_turbulence(c, t, &sides, grid.static_flow.is_some())?;
+        }
         c.num("grid.density", grid.density, Interval::gt(0.0))?;
         c.vec3("grid.initial_velocity", grid.initial_velocity)?;
         c.num(
@@ -398,6 +408,48 @@ fn check_profile(
             format!("{key}.table"),
             "a table",
             "no table unless shape = \"table\"",
+        ));
+    }
+    Ok(())
+}
+
+/// `grid.inflow_turbulence`: values in range, an inflow to act on and an open side for the
+/// fluctuating flux to leave by (a closed domain's projection needs the inflow to balance at
+/// every step); not with a stored flow, which no inflow changes.
+fn check_inflow_turbulence(
+    c: &Checker,
+    t: &InflowTurbulence,
+    sides: &[[GridSide; 2]; 3],
+    static_flow: bool,
+) -> Result<(), SceneError> {
+    let key = "grid.inflow_turbulence";
+    c.num(
+        &format!("{key}.intensity"),
+        t.intensity,
+        Interval::open_closed(0.0, 0.5),
+    )?;
+    c.num(&format!("{key}.length"), t.length, Interval::gt(0.0))?;
+    c.num(
+        &format!("{key}.modes"),
+        t.modes as Real,
+        Interval::closed(1.0, 4096.0),
+    )?;
+    let all = sides.iter().flatten();
+    if !all.clone().any(|s| s.inflow_peak().is_some()) {
+        return Err(c.invalid(key, "a table", "a grid with an inflow side to fluctuate"));
+    }
+    if !all.clone().any(|s| *s == GridSide::Open) {
+        return Err(c.invalid(
+            key,
+            "a table",
+            "an \"open\" side for the fluctuating inflow to leave by",
+        ));
+    }
+    if static_flow {
+        return Err(c.invalid(
+            key,
+            "a table",
+            "not with grid.static_flow (no inflow is solved)",
         ));
     }
     Ok(())

@@ -213,10 +213,7 @@ impl Boundaries {
     /// value plus the fluctuation of `modes` at time `t` (see [`InflowModes`]); [`Self::apply`]
     /// then writes it onto the grid.
     pub fn fluctuate_inflow(&mut self, grid: &MacGrid, modes: &InflowModes, t: Real) {
-        let (lo, hi) = (
-            grid.origin,
-            grid.origin + Vec3::from(grid.dims.map(|d| d as Real)) * grid.dx,
-        );
+        let (lo, hi) = grid.corners();
         for a in 0..3 {
             for (s, side) in self.sides[a].iter().enumerate() {
                 if side.inflow_peak().is_none() {
@@ -337,10 +334,7 @@ impl Boundaries {
             let n = grid.dims[a];
             let periodic = self.sides[a][0] == GridSide::Periodic;
             let sides = &self.sides[a];
-            let (side_lo, side_hi) = (
-                grid.origin,
-                grid.origin + Vec3::from(grid.dims.map(|d| d as Real)) * grid.dx,
-            );
+            let (side_lo, side_hi) = grid.corners();
             let [m1, m2] = [n1 + usize::from(a == 1), n2 + usize::from(a == 2)];
             fn slabs<T: Send>(x: &mut Array3<T>, len: usize) -> rayon::slice::ChunksMut<'_, T> {
                 x.as_slice_mut()

@@ -35,6 +35,12 @@ impl MacGrid {
         }
     }
 
+    /// The grid's lower and upper corners, m: the domain its sides bound.
+    pub fn corners(&self) -> (Vec3, Vec3) {
+        let size = Vec3::from(self.dims.map(|d| d as Real)) * self.dx;
+        (self.origin, self.origin + size)
+    }
+
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.dims.iter().product()

@@ -98,10 +98,7 @@ pub fn velocity_with_walls(solver: &GridSolver, x: &Vec3) -> Vec3 {
     let mac = &solver.mac;
     let half = 0.5 * mac.dx;
     let mut v = mac.velocity_at(x);
-    let (lo, hi) = (
-        mac.origin,
-        mac.origin + Vec3::from(mac.dims.map(|d| d as Real)) * mac.dx,
-    );
+    let (lo, hi) = mac.corners();
     for (b, sides) in solver.bounds.sides.iter().enumerate() {
         let extent = mac.dims[b] as Real * mac.dx;
         for (end, side) in sides.iter().enumerate() {

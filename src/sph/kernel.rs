@@ -15,6 +15,16 @@ pub struct CubicSpline {
     l: Real,
 }
 
+/// The cubic spline's constants: support h, 1 / h, k = 8 / (pi h^3) (W's) and l = 6 k
+/// (dW/dq's).
+#[derive(Debug, Clone, Copy)]
+pub struct KernelConstants {
+    pub h: Real,
+    pub inv_h: Real,
+    pub k: Real,
+    pub l: Real,
+}
+
 impl CubicSpline {
     /// The kernel with support radius `h` (> 0).
     pub fn new(h: Real) -> Self {
@@ -24,6 +34,16 @@ impl CubicSpline {
             inv_h: 1.0 / h,
             k: 8.0 / (PI * h3),
             l: 48.0 / (PI * h3),
+        }
+    }
+
+    /// The kernel's constants, for evaluations written lane by lane.
+    pub fn constants(&self) -> KernelConstants {
+        KernelConstants {
+            h: self.h,
+            inv_h: self.inv_h,
+            k: self.k,
+            l: self.l,
         }
     }
 

@@ -81,6 +81,16 @@ impl PairCache {
         fit(&mut self.wall_rate, n, 0.0);
         let tiny = 1e-9 * volume * volume / kernel.support().powi(8);
         let w0 = volume * kernel.w_zero();
+        let fluid = Targets {
+            x,
+            volume: Volumes::Uniform(volume),
+            v: None,
+        };
+        let walls = Targets {
+            x: &boundary.x,
+            volume: Volumes::Each(&boundary.volume),
+            v: Some(&boundary.v),
+        };
         let fluid_blocks = split_blocks(fluid_lists, &mut self.fluid);
         let boundary_blocks = split_blocks(boundary_lists, &mut self.boundary);
         fluid_blocks
@@ -101,16 +111,6 @@ impl PairCache {
                         let bl = boundary_lists.of(i);
                         let (bseg, rest) = bg.split_at_mut(bl.len());
                         bg = rest;
-                        let fluid = Targets {
-                            x,
-                            volume: Volumes::Uniform(volume),
-                            v: None,
-                        };
-                        let walls = Targets {
-                            x: &boundary.x,
-                            volume: Volumes::Each(&boundary.volume),
-                            v: Some(&boundary.v),
-                        };
                         let f = row::sums(kernel, &x[i], &fluid, fl, fseg, w0);
                         let b = row::sums(kernel, &x[i], &walls, bl, bseg, f.w);
                         ratio[k] = b.w;

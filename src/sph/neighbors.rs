@@ -297,7 +297,7 @@ mod tests {
         let radius = 0.2;
         let grid = CellGrid::build(&x, radius);
         let soa = Components::of(&x);
-        let (mut ranges, mut found, mut wide_found) = (Vec::new(), vec![0; 1000], vec![0; 1000]);
+        let (mut ranges, mut found) = (Vec::new(), vec![0; 1000]);
         let mut pairs = 0;
         for c in &grid.cells {
             grid.ranges_around(c.coord, &mut ranges);
@@ -317,6 +317,7 @@ mod tests {
                     pairs += n;
                     #[cfg(target_arch = "x86_64")]
                     if filter::wide_available() {
+                        let mut wide_found = vec![0; found.len()];
                         // SAFETY: the CPU has the features, checked just above.
                         let m = unsafe {
                             filter::wide(&soa, &ranges, &xi, radius * radius, skip, &mut wide_found)

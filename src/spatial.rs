@@ -3,8 +3,9 @@
 //!
 //! Points are sorted by the Morton (z-order) code of their cell, so that points close in space
 //! are close in memory. The non-empty cells form a compact list, each a range of the sorted
-//! points, and an open-addressing hash table maps a cell's code to its place in that list. The
-//! 27 cells around a cell are looked up once per cell, not once per point.
+//! points, and an open-addressing hash table maps each non-empty aligned 2 x 2 x 2 block of
+//! cells to its eight cells' ranges. The at most eight blocks that hold the 27 cells around a
+//! cell are looked up once per cell, not once per point.
 
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -25,10 +26,15 @@ fn spread(v: u64) -> u64 {
     x
 }
 
+/// A cell coordinate made non-negative (and clamped to 21 bits) for the Morton code.
+#[inline]
+fn biased(v: i64) -> u64 {
+    (v + BIAS).clamp(0, 2 * BIAS - 1) as u64
+}
+
 /// Morton code of integer cell coordinates.
 fn morton(c: [i64; 3]) -> u64 {
-    let b = |v: i64| (v + BIAS).clamp(0, 2 * BIAS - 1) as u64;
-    spread(b(c[0])) | (spread(b(c[1])) << 1) | (spread(b(c[2])) << 2)
+    spread(biased(c[0])) | (spread(biased(c[1])) << 1) | (spread(biased(c[2])) << 2)
 }
 
 /// Integer coordinates of the cell holding `x`.
@@ -93,22 +99,25 @@ pub(crate) struct Cell {
     pub(crate) end: u32,
 }
 
-/// One slot of the hash table: a cell's Morton code and its range of points.
-#[derive(Debug, Clone, Copy)]
-struct Slot {
-    key: u64,
-    start: u32,
-    end: u32,
-}
+/// The point ranges of the eight cells of one aligned 2 x 2 x 2 block of cells, by the low
+/// three bits of their Morton codes; an empty cell's range is empty. One cache line.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct BlockRanges([(u32, u32); 8]);
 
 /// A compact hashed grid over a set of points that is already in cell order.
 #[derive(Debug, Clone)]
 pub struct CellGrid {
     pub(crate) cell: Real,
     pub(crate) cells: Vec<Cell>,
-    /// Open-addressing table (linear probing) of the non-empty cells, a power of two long.
-    /// It holds the point ranges itself, so a lookup touches one place in memory.
-    table: Vec<Slot>,
+    /// Open-addressing table (linear probing) of the non-empty 2 x 2 x 2 blocks of cells, a
+    /// power of two long: block codes (a cell's Morton code without its low three bits) in
+    /// `keys`, the eight cells' point ranges beside them in `ranges`. The 27 cells around a
+    /// cell lie in at most eight blocks, so a search looks up at most eight keys per cell,
+    /// and a block absent from the table (the walls' grid, seen from most fluid cells) is
+    /// a short probe into a table at most half full.
+    keys: Vec<u64>,
+    ranges: Vec<BlockRanges>,
 }
 
 impl CellGrid {
@@ -117,81 +126,102 @@ impl CellGrid {
     pub fn build(points: &[Vec3], cell: Real) -> Self {
         let cell = cell * CELL_MARGIN;
         let inv = 1.0 / cell;
+        let codes: Vec<u64> = points.par_iter().map(|x| morton(cell_of(x, inv))).collect();
         let mut cells: Vec<Cell> = Vec::new();
-        let mut last_key = None;
-        for (i, x) in points.iter().enumerate() {
-            let coord = cell_of(x, inv);
-            let key = morton(coord);
-            if last_key == Some(key) {
-                if let Some(c) = cells.last_mut() {
-                    c.end = i as u32 + 1;
-                }
-            } else {
-                cells.push(Cell {
-                    coord,
+        for (i, (x, &key)) in points.iter().zip(&codes).enumerate() {
+            match cells.last_mut() {
+                Some(c) if codes[c.start as usize] == key => c.end = i as u32 + 1,
+                _ => cells.push(Cell {
+                    coord: cell_of(x, inv),
                     start: i as u32,
                     end: i as u32 + 1,
-                });
-                last_key = Some(key);
+                }),
             }
         }
-        let size = (2 * cells.len()).next_power_of_two().max(16);
-        let empty = Slot {
-            key: EMPTY,
-            start: 0,
-            end: 0,
-        };
-        let mut table = vec![empty; size];
+        let blocks = 1 + cells
+            .windows(2)
+            .filter(|w| codes[w[0].start as usize] >> 3 != codes[w[1].start as usize] >> 3)
+            .count();
+        let size = (2 * blocks).next_power_of_two().max(16);
+        let mut keys = vec![EMPTY; size];
+        let mut ranges = vec![BlockRanges::default(); size];
         for c in &cells {
-            let key = morton(c.coord);
-            let mut slot = Self::hash(key, size);
-            while table[slot].key != EMPTY && table[slot].key != key {
-                slot = (slot + 1) & (size - 1);
-            }
-            table[slot] = Slot {
-                key,
-                start: c.start,
-                end: c.end,
-            };
+            let code = codes[c.start as usize];
+            let slot = Self::probe(&keys, code >> 3);
+            keys[slot] = code >> 3;
+            ranges[slot].0[(code & 7) as usize] = (c.start, c.end);
         }
-        Self { cell, cells, table }
-    }
-
-    /// Home slot of a Morton code. The eight cells of an aligned 2 x 2 x 2 block (which share
-    /// all but the lowest three bits of their code) get neighbouring slots, so the 27 lookups
-    /// around a cell touch a few cache lines rather than 27.
-    #[inline]
-    fn hash(key: u64, size: usize) -> usize {
-        let block = ((key >> 3).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 20) << 3;
-        (block | (key & 7)) as usize & (size - 1)
-    }
-
-    /// The range of points in the cell with coordinates `coord`, if it holds any.
-    #[inline]
-    fn lookup(&self, coord: [i64; 3]) -> Option<(u32, u32)> {
-        let key = morton(coord);
-        let size = self.table.len();
-        let mut slot = Self::hash(key, size);
-        loop {
-            let s = self.table[slot];
-            if s.key == key {
-                return Some((s.start, s.end));
-            }
-            if s.key == EMPTY {
-                return None;
-            }
-            slot = (slot + 1) & (size - 1);
+        Self {
+            cell,
+            cells,
+            keys,
+            ranges,
         }
     }
 
-    /// Ranges of points in the up to 27 cells around `coord`.
+    /// The slot of block code `block` in `keys`: where it is, or the empty slot where it goes.
+    #[inline]
+    fn probe(keys: &[u64], block: u64) -> usize {
+        let mask = keys.len() - 1;
+        let mut slot = (block.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask;
+        while keys[slot] != EMPTY && keys[slot] != block {
+            slot = (slot + 1) & mask;
+        }
+        slot
+    }
+
+    /// The slot of block code `block`, if the block holds points.
+    #[inline]
+    fn block(&self, block: u64) -> Option<usize> {
+        let slot = Self::probe(&self.keys, block);
+        (self.keys[slot] == block).then_some(slot)
+    }
+
+    /// Ranges of points in the up to 27 cells around `coord`, in the order z, y, x (each
+    /// outermost to innermost, -1 to +1).
     pub(crate) fn ranges_around(&self, coord: [i64; 3], out: &mut Vec<(u32, u32)>) {
         out.clear();
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    if let Some(r) = self.lookup([coord[0] + dx, coord[1] + dy, coord[2] + dz]) {
-                        out.push(r);
+        self.each_range_around(coord, |r| out.push(r));
+    }
+
+    /// Calls `f` with the range of points of each non-empty cell of the 27 around `coord`, in
+    /// the order of [`Self::ranges_around`].
+    #[inline]
+    fn each_range_around(&self, coord: [i64; 3], mut f: impl FnMut((u32, u32))) {
+        // A cell's block is its biased coordinates halved (the Morton code of the halves is
+        // the cell's code without its low three bits). The 27 cells span one or two blocks
+        // along each axis: look each block up once.
+        let first = coord.map(|c| biased(c - 1) >> 1);
+        let span = coord.map(|c| (biased(c + 1) >> 1) - (biased(c - 1) >> 1));
+        let mut slots = [[[None; 2]; 2]; 2];
+        for (bz, plane) in slots.iter_mut().enumerate().take(span[2] as usize + 1) {
+            for (by, row) in plane.iter_mut().enumerate().take(span[1] as usize + 1) {
+                for (bx, slot) in row.iter_mut().enumerate().take(span[0] as usize + 1) {
+                    let b = [
+                        first[0] + bx as u64,
+                        first[1] + by as u64,
+                        first[2] + bz as u64,
+                    ];
+                    *slot = self.block(spread(b[0]) | (spread(b[1]) << 1) | (spread(b[2]) << 2));
+                }
+            }
+        }
+        if slots.iter().flatten().flatten().all(Option::is_none) {
+            return;
+        }
+        let axis = |a: usize| [-1, 0, 1].map(|d| biased(coord[a] + d));
+        let (xs, ys, zs) = (axis(0), axis(1), axis(2));
+        for z in zs {
+            let plane = &slots[((z >> 1) - first[2]) as usize];
+            for y in ys {
+                let row = &plane[((y >> 1) - first[1]) as usize];
+                for x in xs {
+                    if let Some(slot) = row[((x >> 1) - first[0]) as usize] {
+                        let low = (x & 1) | ((y & 1) << 1) | ((z & 1) << 2);
+                        let r = self.ranges[slot].0[low as usize];
+                        if r.0 != r.1 {
+                            f(r);
+                        }
                     }
                 }
             }
@@ -206,7 +236,8 @@ impl CellGrid {
     /// Bytes held by the grid.
     pub fn memory_bytes(&self) -> usize {
         self.cells.capacity() * std::mem::size_of::<Cell>()
-            + self.table.capacity() * std::mem::size_of::<Slot>()
+            + self.keys.capacity() * std::mem::size_of::<u64>()
+            + self.ranges.capacity() * std::mem::size_of::<BlockRanges>()
     }
 }
 
@@ -214,21 +245,13 @@ impl CellGrid {
     /// Calls `f(j)` for every point j of `points` (the set this grid was built over) closer
     /// than `radius` (at most the cell size) to the arbitrary point `p`.
     pub fn for_each_near(&self, p: &Vec3, points: &[Vec3], radius: Real, mut f: impl FnMut(usize)) {
-        let c = cell_of(p, 1.0 / self.cell);
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some((s, e)) = self.lookup([c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for j in s..e {
-                        if (p - points[j as usize]).norm_squared() < radius * radius {
-                            f(j as usize);
-                        }
-                    }
+        self.each_range_around(cell_of(p, 1.0 / self.cell), |(s, e)| {
+            for j in s..e {
+                if (p - points[j as usize]).norm_squared() < radius * radius {
+                    f(j as usize);
                 }
             }
-        }
+        });
     }
 }
 
@@ -271,5 +294,45 @@ impl PointHash {
         }
         self.grid
             .for_each_near(p, &self.sorted, radius, |j| f(self.original[j] as usize));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// Every query finds exactly the points within the radius, once each, through the block
+    /// table: on a dense cloud straddling the origin (negative cell coordinates, blocks cut
+    /// by the sign change) and on sparse points far apart (blocks holding one cell, most
+    /// neighbouring blocks absent), from queries inside and outside the clouds.
+    #[test]
+    fn queries_find_exactly_the_points_within_the_radius() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut random = |scale: Real| {
+            Vec3::new(rng.random(), rng.random(), rng.random()).map(|c: Real| (c - 0.5) * scale)
+        };
+        let radius = 0.1;
+        for (points, spread, hits) in [(2000, 1.0, 1000), (300, 20.0, 200)] {
+            let cloud: Vec<Vec3> = (0..points).map(|_| random(spread)).collect();
+            let hash = PointHash::new(&cloud, radius);
+            let mut within = 0;
+            for k in 0..400 {
+                let p = if k % 2 == 0 {
+                    cloud[k % points] + random(0.1)
+                } else {
+                    random(1.5 * spread)
+                };
+                let mut got = Vec::new();
+                hash.for_each_near(&p, radius, |i| got.push(i));
+                got.sort_unstable();
+                let want: Vec<usize> = (0..points)
+                    .filter(|&i| (p - cloud[i]).norm_squared() < radius * radius)
+                    .collect();
+                assert_eq!(got, want, "query {k} at {p:?}");
+                within += want.len();
+            }
+            assert!(within >= hits, "{within} hits: the test would be vacuous");
+        }
     }
 }

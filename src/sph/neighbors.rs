@@ -64,6 +64,11 @@ impl NeighborLists {
                 let mut found = Vec::new();
                 for c in chunk {
                     target_grid.ranges_around(c.coord, &mut ranges);
+                    if ranges.is_empty() {
+                        // No targets near (the walls' grid, seen from inside the fluid).
+                        counts.extend(std::iter::repeat_n(0, (c.end - c.start) as usize));
+                        continue;
+                    }
                     merge_adjacent(&mut ranges);
                     let candidates: usize = ranges.iter().map(|&(s, e)| (e - s) as usize).sum();
                     found.resize((candidates + filter::LANES).max(found.len()), 0);

@@ -47,9 +47,13 @@ pub struct Bounds {
 /// for the warm start and overwritten with this step's total). With `second_order`, the
 /// density solve adds dt^2 / 2 D^2(rho / rho_0)/Dt^2 to its prediction (see
 /// `Neighborhood::density_curvature`: a first-order prediction ends each step more compressed
-/// than it predicts when the velocities are noisy), evaluated once at the velocities the solve
-/// starts from: re-evaluated every iteration, as the IISPH solve does, the term grows with the
-/// corrections the Jacobi update makes and the tank diverged at a corner within four steps.
+/// than it predicts when the velocities are noisy), evaluated at the velocities the solve
+/// starts from and, once the iteration has converged, once more at the corrected velocities,
+/// the iteration going on if the new prediction is over the tolerance (with the term from the
+/// start only, the tank ended its steps 0.0526 % compressed against 0.05 %; with the second
+/// evaluation 0.0486 %). Re-evaluated every iteration, as the IISPH solve does, the term grows
+/// with the corrections the Jacobi update makes and the tank diverged at a corner within four
+/// steps.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     nb: &Neighborhood,
@@ -63,15 +67,19 @@ pub fn solve(
     second_order: bool,
 ) -> SolveResult {
     let n = v.len();
-    let curvature: Vec<Real> = if second_order && which == Solve::Density {
+    let curvature_at = |v: &[Vec3]| -> Vec<Real> {
         (0..n)
             .into_par_iter()
             .map(|i| 0.5 * dt * dt * nb.density_curvature(i, v))
             .collect()
+    };
+    let second_order = second_order && which == Solve::Density;
+    let mut curvature: Vec<Real> = if second_order {
+        curvature_at(v)
     } else {
         Vec::new()
     };
-    let error = |i: usize, v: &[Vec3]| -> Real {
+    let error = |i: usize, v: &[Vec3], curvature: &[Real]| -> Real {
         match which {
             Solve::Divergence => {
                 if nb.count(i) < MIN_NEIGHBORS_FOR_DIVERGENCE {
@@ -87,7 +95,10 @@ pub fn solve(
         }
     };
     let inv_dt2 = 1.0 / (dt * dt);
-    let mut err: Vec<Real> = (0..n).into_par_iter().map(|i| error(i, v)).collect();
+    let mut err: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|i| error(i, v, &curvature))
+        .collect();
     // Warm start: half of last step's stiffness where the particle is compressed now.
     let mut kappa: Vec<Real> = (0..n)
         .into_par_iter()
@@ -104,27 +115,36 @@ pub fn solve(
         apply(nb, &kappa, v, dt);
         err.par_iter_mut()
             .enumerate()
-            .for_each(|(i, e)| *e = error(i, v));
+            .for_each(|(i, e)| *e = error(i, v, &curvature));
     }
     let mut avg = mean_positive(&err);
     let mut iterations = 0;
-    while iterations < bounds.max_iterations
-        && (iterations < bounds.min_iterations || avg > bounds.tolerance)
-    {
-        kappa
-            .par_iter_mut()
-            .zip(total.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, (k, t))| {
-                *k = err[i] * factor[i] * inv_dt2;
-                *t += *k;
-            });
-        apply(nb, &kappa, v, dt);
-        err.par_iter_mut()
-            .enumerate()
-            .for_each(|(i, e)| *e = error(i, v));
-        avg = mean_positive(&err);
-        iterations += 1;
+    for pass in 0..if second_order { 2 } else { 1 } {
+        if pass > 0 {
+            curvature = curvature_at(v);
+            err.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, e)| *e = error(i, v, &curvature));
+            avg = mean_positive(&err);
+        }
+        while iterations < bounds.max_iterations
+            && (iterations < bounds.min_iterations || avg > bounds.tolerance)
+        {
+            kappa
+                .par_iter_mut()
+                .zip(total.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (k, t))| {
+                    *k = err[i] * factor[i] * inv_dt2;
+                    *t += *k;
+                });
+            apply(nb, &kappa, v, dt);
+            err.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, e)| *e = error(i, v, &curvature));
+            avg = mean_positive(&err);
+            iterations += 1;
+        }
     }
     warm.par_iter_mut()
         .zip(total.par_iter())

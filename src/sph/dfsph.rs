@@ -119,7 +119,9 @@ pub fn solve(
     }
     let mut avg = mean_positive(&err);
     let mut iterations = 0;
-    for pass in 0..if second_order { 2 } else { 1 } {
+    // With the second-order term: one pass on the term from the start, one on the term again.
+    let passes = if second_order { 2 } else { 1 };
+    for pass in 0..passes {
         if pass > 0 {
             curvature = curvature_at(v);
             err.par_iter_mut()

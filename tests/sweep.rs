@@ -496,10 +496,12 @@ fn the_forced_channel_converges_at_its_viscosity_schemes_order() {
 
 /// The hydrostatic tank at rest (`scenes/hydrostatic_tank.toml`, 1 s), measured with
 /// `--analytic hydrostatic`: the three probes' pressure over the second half against
-/// rho g depth under the block's top. The error falls as the spacing halves and is under 2 %
-/// at the shipped 0.02 m (the bound `tests/sph_physics.rs` puts on the gradient).
+/// rho g depth under the block's top is within the SPH fidelity issue's 1 % at the shipped
+/// 0.02 m and at 0.04 m (measured 0.66 % at both). Until DFSPH recorded the divergence solve's
+/// share of the pressure, the error was 5.5 % at 0.04 m and 1.5 % at 0.02 m, and seemed to
+/// converge with the spacing.
 #[test]
-fn the_tank_approaches_the_hydrostatic_pressure_as_the_spacing_halves() {
+fn the_tank_holds_the_hydrostatic_pressure_within_one_percent() {
     let tmp = tempfile::tempdir().expect("temp dir");
     let rows = study(
         &tmp.path().join("tank"),
@@ -515,7 +517,7 @@ fn the_tank_approaches_the_hydrostatic_pressure_as_the_spacing_halves() {
     );
     let err = numbers(&rows, "error_hydrostatic");
     println!("hydrostatic errors at 0.04 and 0.02 m: {err:?}");
-    assert!(err[1] < err[0] && err[1] < 0.02, "errors {err:?}");
+    assert!(err.iter().all(|&e| e < 0.01), "errors {err:?}");
 }
 
 /// `--analytic` names what a scene lacks before any run: the dam break has no grid channel,

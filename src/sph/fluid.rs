@@ -12,11 +12,11 @@ pub struct FluidParticles {
     pub v: Vec<Vec3>,
     /// Density, kg/m^3, from the last neighbourhood update.
     pub density: Vec<Real>,
-    /// Pressure, Pa, from the last pressure solve.
+    /// Pressure, Pa, of the last step: the sum of its pressure solves (DFSPH has two).
     pub pressure: Vec<Real>,
     /// DFSPH warm start: stiffness of the density solve times dt^2 (dt-independent).
     pub kappa: Vec<Real>,
-    /// DFSPH warm start: stiffness of the divergence solve times dt (dt-independent).
+    /// DFSPH warm start: stiffness of the divergence solve times dt^2 (dt-independent).
     pub kappa_v: Vec<Real>,
     /// Mass of every particle, kg.
     pub mass: Real,

@@ -479,11 +479,13 @@ impl SphSolver {
         let start = Instant::now();
         self.open.impose(x, v);
         stats.open_seconds += start.elapsed().as_secs_f64();
-        // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2).
+        // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2):
+        // the divergence solve's and the density solve's, both pressure impulses of this step.
         pressure
             .par_iter_mut()
-            .zip(kappa.par_iter().zip(density.par_iter()))
-            .for_each(|(p, (k, rho))| *p = k / (dt * dt) * rho * rho / rho0);
+            .zip(kappa.par_iter().zip(kappa_v.par_iter()))
+            .zip(density.par_iter())
+            .for_each(|((p, (k, kv)), rho)| *p = (k + kv) / (dt * dt) * rho * rho / rho0);
         x.par_iter_mut()
             .zip(v.par_iter())
             .for_each(|(x, v)| *x += dt * v);

@@ -328,6 +328,18 @@ fn out_of_range_values() {
 
     let m = message(parse_with(
         MINIMAL,
+        &[
+            "pressure.max_iterations=50",
+            "pressure.divergence_min_iterations=51",
+        ],
+    ));
+    assert_contains(
+        &m,
+        &["`pressure.divergence_min_iterations`", "= 51", "[1, 50]"],
+    );
+
+    let m = message(parse_with(
+        MINIMAL,
         &["pressure.solver=iisph", "pressure.signed=true"],
     ));
     assert_contains(&m, &["`pressure.signed`", "true", "iisph", "DFSPH"]);

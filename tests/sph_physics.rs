@@ -167,6 +167,36 @@ fn dfsph_solvers_meet_their_tolerances_in_the_dam_break() {
     assert!(steps > 100);
 }
 
+/// The divergence solve keeps its own least number of iterations: at one, as Bender &
+/// Koschier's and SPlisHSPlasH's, it stops after a single iteration wherever that meets its
+/// tolerance, while the density solve still runs its two; at three it runs three. Both end
+/// under their tolerances.
+#[test]
+fn the_divergence_solve_has_its_own_least_iterations() {
+    for least in [1, 3] {
+        let least_key = format!("pressure.divergence_min_iterations={least}");
+        let scene = dam_break_slab(0.2, &[least_key.as_str()]);
+        let p = &scene.pressure;
+        let mut s = solver(&scene);
+        let mut at_least = 0;
+        while s.time() < 0.2 {
+            let stats = s.step(scene.time.end).expect("stable");
+            let (div, press) = (stats.divergence, stats.pressure);
+            assert!(
+                div.iterations >= least && press.iterations >= 2,
+                "{stats:?}"
+            );
+            assert!(div.error <= p.divergence_tolerance, "{stats:?}");
+            assert!(press.error <= p.density_tolerance, "{stats:?}");
+            at_least += usize::from(div.iterations == least);
+        }
+        assert!(
+            at_least > 10,
+            "{at_least} steps at {least} divergence iterations"
+        );
+    }
+}
+
 /// Dam break (Martin & Moyce): the front advances (never receding by more than a tenth of a
 /// spacing) until it reaches the far wall, its speed stays below the shallow-water bound
 /// 2 sqrt(2 g a), and kinetic plus potential energy never grows (no moving bodies here).

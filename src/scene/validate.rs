@@ -179,6 +179,14 @@ impl Scene {
             Interval::closed(1.0, Real::from(p.max_iterations))
                 .note("1 to `pressure.max_iterations`"),
         )?;
+        if let Some(least) = p.divergence_min_iterations {
+            c.num(
+                "pressure.divergence_min_iterations",
+                Real::from(least),
+                Interval::closed(1.0, Real::from(p.max_iterations))
+                    .note("1 to `pressure.max_iterations`"),
+            )?;
+        }
         if p.signed && p.solver != crate::sph::PressureSolverKind::Dfsph {
             return Err(c.invalid(
                 "pressure.signed",

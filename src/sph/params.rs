@@ -213,9 +213,22 @@ pub struct Pressure {
     /// Least iterations per solve.
     #[serde(default = "default_min_iterations")]
     pub min_iterations: u32,
+    /// Least iterations of the DFSPH divergence solve, when it should differ from
+    /// `min_iterations` (its default). Bender & Koschier's divergence solve, and
+    /// SPlisHSPlasH's, run at least one; their density solve at least two.
+    #[serde(default)]
+    pub divergence_min_iterations: Option<u32>,
     /// Most iterations per solve; a solve that hits it is reported in metrics.csv.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: u32,
+}
+
+impl Pressure {
+    /// The divergence solve's least iterations: its own setting, else `min_iterations`.
+    pub fn divergence_min_iterations(&self) -> u32 {
+        self.divergence_min_iterations
+            .unwrap_or(self.min_iterations)
+    }
 }
 
 impl Default for Pressure {
@@ -229,6 +242,7 @@ impl Default for Pressure {
             signed: false,
             ambient: 0.0,
             min_iterations: default_min_iterations(),
+            divergence_min_iterations: None,
             max_iterations: default_max_iterations(),
         }
     }

@@ -392,9 +392,9 @@ impl SphSolver {
                 ),
                 None => dfsph::solve(&nb, which, ratio, factor, v, warm, dt, bounds, second_order),
             };
-        let bounds = |tolerance| Bounds {
+        let bounds = |tolerance, min_iterations| Bounds {
             tolerance,
-            min_iterations: settings.min_iterations,
+            min_iterations,
             max_iterations: settings.max_iterations,
         };
         stats.dt = dt;
@@ -416,7 +416,10 @@ impl SphSolver {
                 Solve::Divergence,
                 v,
                 kappa_v,
-                bounds(settings.divergence_tolerance),
+                bounds(
+                    settings.divergence_tolerance,
+                    settings.divergence_min_iterations(),
+                ),
                 false,
             );
             stats.divergence_seconds = start.elapsed().as_secs_f64();
@@ -446,7 +449,7 @@ impl SphSolver {
         if viscosity.xsph > 0.0 {
             forces::xsph(&nb, density, rho0, v, viscosity.xsph);
         }
-        let pressure_bounds = bounds(settings.density_tolerance);
+        let pressure_bounds = bounds(settings.density_tolerance, settings.min_iterations);
         let start = Instant::now();
         ran.push("pressure");
         stats.pressure = if dfsph {
@@ -542,8 +545,11 @@ impl SphSolver {
             out.push((
                 "divergence",
                 format!(
-                    "DFSPH divergence solve{}, tolerance {}",
-                    signed, settings.divergence_tolerance
+                    "DFSPH divergence solve{}, tolerance {} ({} to {} iterations)",
+                    signed,
+                    settings.divergence_tolerance,
+                    settings.divergence_min_iterations(),
+                    settings.max_iterations,
                 ),
             ));
         }

@@ -224,7 +224,7 @@ mod row {
     /// Whether the CPU runs [`wide`].
     #[cfg(target_arch = "x86_64")]
     pub fn wide_available() -> bool {
-        is_x86_feature_detected!("avx512f")
+        is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
     }
 
     /// [`scalar`] for eight pairs at a time on AVX-512: the targets' positions (and volumes
@@ -232,9 +232,9 @@ mod row {
     /// with its two branches as masks, the gradients rounded to f32 and stored pair by pair.
     ///
     /// # Safety
-    /// The CPU must have AVX-512F ([`wide_available`]).
+    /// The CPU must have AVX-512F and AVX-512VL (the masked 256-bit index load; without VL it is a call, not an instruction) ([`wide_available`]).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl")]
     pub unsafe fn wide(
         kernel: &CubicSpline,
         xi: &Vec3,

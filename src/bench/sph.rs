@@ -4,6 +4,7 @@
 //! divergence tolerance 0.1 %, at least 2 iterations, viscosity 0.01. The scene file
 //! `scenes/bench_dam_break.toml` is the same set-up at the 97k size.
 
+use crate::metrics::density_errors;
 use crate::pipeline::{sph_solver, RunError};
 use crate::scene::{self, PressureSolverKind, Scene};
 use crate::sph::neighbors::{cell_order, CellGrid, NeighborLists};
@@ -54,6 +55,9 @@ pub struct BenchResult {
     pub pressure_iterations: f64,
     pub divergence_iterations: f64,
     pub bytes_per_particle: f64,
+    /// The average compression measured at the new positions after each timed step (a
+    /// fraction of the rest density): the accuracy the time buys.
+    pub compression: f64,
     /// Milliseconds per step in the turbulence refinement.
     pub refinement_ms: f64,
 }
@@ -140,7 +144,7 @@ fn measure_solver(
     steps: u64,
 ) -> Result<BenchResult, RunError> {
     let (mut total, mut search, mut iterations, mut refine) = (0.0, 0.0, 0.0, 0.0);
-    let mut divergence_iterations = 0.0;
+    let (mut divergence_iterations, mut compression) = (0.0, 0.0);
     let (mut update, mut divergence, mut pressure) = (0.0, 0.0, 0.0);
     for _ in 0..steps {
         let t0 = Instant::now();
@@ -150,6 +154,7 @@ fn measure_solver(
         sph.update_neighborhoods();
         total += t0.elapsed().as_secs_f64();
         update += t1.elapsed().as_secs_f64();
+        compression += density_errors(&sph.fluid.density, sph.fluid.rest_density).0;
         iterations += stats.pressure.iterations as f64;
         divergence_iterations += stats.divergence.iterations as f64;
         refine += stats.refinement_seconds;
@@ -170,6 +175,7 @@ fn measure_solver(
         pressure_iterations: iterations / steps as f64,
         divergence_iterations: divergence_iterations / steps as f64,
         bytes_per_particle: sph.memory_bytes() as f64 / sph.fluid.len() as f64,
+        compression: compression / steps as f64,
         refinement_ms: ms(refine),
     })
 }
@@ -206,7 +212,7 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
         args.steps
     );
     println!(
-        "{:<6} {:>9} {:>9} {:>10} {:>11} {:>10} {:>8} {:>10} {:>8} {:>12} {:>10}",
+        "{:<6} {:>9} {:>9} {:>10} {:>11} {:>10} {:>8} {:>10} {:>8} {:>12} {:>10} {:>8}",
         "solver",
         "fluid",
         "boundary",
@@ -217,7 +223,8 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
         "press ms",
         "p-iters",
         "M p-steps/s",
-        "B/particle"
+        "B/particle",
+        "comp %"
     );
     for &size in &args.sizes {
         let edge = cube_edge(size);
@@ -235,7 +242,7 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
             advance(&mut sph, args.warmup)?;
             let r = measure_solver(&mut sph, solver, args.steps)?;
             println!(
-                "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>10.1} {:>8.1} {:>10.1} {:>8.1} {:>12.3} {:>10.0}",
+                "{:<6} {:>9} {:>9} {:>10.1} {:>11.1} {:>10.1} {:>8.1} {:>10.1} {:>8.1} {:>12.3} {:>10.0} {:>8.4}",
                 name,
                 r.fluid,
                 r.boundary,
@@ -246,7 +253,8 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
                 r.pressure_ms,
                 r.pressure_iterations,
                 r.fluid as f64 / r.ms_per_step / 1e3,
-                r.bytes_per_particle
+                r.bytes_per_particle,
+                100.0 * r.compression
             );
             if args.floors && solver == PressureSolverKind::Dfsph {
                 super::floors::print(&sph, &r, super::floors::read_bandwidth());

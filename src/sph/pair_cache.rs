@@ -232,7 +232,8 @@ mod row {
     /// with its two branches as masks, the gradients rounded to f32 and stored pair by pair.
     ///
     /// # Safety
-    /// The CPU must have AVX-512F and AVX-512VL (the masked 256-bit index load; without VL it is a call, not an instruction) ([`wide_available`]).
+    /// The CPU must have AVX-512F and AVX-512VL ([`wide_available`]). Without VL enabled here
+    /// the masked 256-bit index load compiles to a call that spills every vector register.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl")]
     pub unsafe fn wide(

@@ -54,6 +54,13 @@ const CELL_MARGIN: Real = 1.0 + 1e-9;
 /// The permutation that sorts `points` by the Morton code of their cell (cell size `cell`):
 /// entry k of the result is the old index of the point that goes to place k.
 pub fn cell_order(points: &[Vec3], cell: Real) -> Vec<u32> {
+    cell_order_and_codes(points, cell).0
+}
+
+/// [`cell_order`] and the cell codes of the points in that order, which
+/// [`CellGrid::from_codes`] builds on once the points are permuted: the codes the sort
+/// computed are not computed again.
+pub fn cell_order_and_codes(points: &[Vec3], cell: Real) -> (Vec<u32>, Vec<u64>) {
     let inv = 1.0 / (cell * CELL_MARGIN);
     let mut keyed: Vec<(u64, u32)> = points
         .par_iter()
@@ -61,7 +68,7 @@ pub fn cell_order(points: &[Vec3], cell: Real) -> Vec<u32> {
         .map(|(i, x)| (morton(cell_of(x, inv)), i as u32))
         .collect();
     keyed.par_sort_unstable();
-    keyed.into_par_iter().map(|(_, i)| i).collect()
+    keyed.into_par_iter().map(|(code, i)| (i, code)).unzip()
 }
 
 /// Reorders `data` so that `data[k]` becomes the old `data[perm[k]]`.
@@ -124,11 +131,19 @@ impl CellGrid {
     /// Builds the grid over `points`, which must be in the order [`cell_order`] gives for the
     /// same cell size (each cell's points must be contiguous).
     pub fn build(points: &[Vec3], cell: Real) -> Self {
+        let inv = 1.0 / (cell * CELL_MARGIN);
+        let codes: Vec<u64> = points.par_iter().map(|x| morton(cell_of(x, inv))).collect();
+        Self::from_codes(points, &codes, cell)
+    }
+
+    /// [`Self::build`] from the points' cell codes at the same cell size, in their order
+    /// ([`cell_order_and_codes`]).
+    pub fn from_codes(points: &[Vec3], codes: &[u64], cell: Real) -> Self {
+        assert_eq!(points.len(), codes.len(), "one cell code per point");
         let cell = cell * CELL_MARGIN;
         let inv = 1.0 / cell;
-        let codes: Vec<u64> = points.par_iter().map(|x| morton(cell_of(x, inv))).collect();
         let mut cells: Vec<Cell> = Vec::new();
-        for (i, (x, &key)) in points.iter().zip(&codes).enumerate() {
+        for (i, (x, &key)) in points.iter().zip(codes).enumerate() {
             match cells.last_mut() {
                 Some(c) if codes[c.start as usize] == key => c.end = i as u32 + 1,
                 _ => cells.push(Cell {
@@ -270,9 +285,9 @@ pub(crate) struct PointHash {
 impl PointHash {
     /// The hash over `points` with cells of size `cell` (the largest query radius).
     pub(crate) fn new(points: &[Vec3], cell: Real) -> Self {
-        let original = cell_order(points, cell);
+        let (original, codes) = cell_order_and_codes(points, cell);
         let sorted: Vec<Vec3> = original.iter().map(|&i| points[i as usize]).collect();
-        let grid = CellGrid::build(&sorted, cell);
+        let grid = CellGrid::from_codes(&sorted, &codes, cell);
         let (lo, hi) = bounding_box(&sorted);
         Self {
             sorted,

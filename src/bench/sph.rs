@@ -8,7 +8,7 @@
 use crate::metrics::density_errors;
 use crate::pipeline::{sph_solver, RunError};
 use crate::scene::{self, PressureSolverKind, Scene};
-use crate::sph::neighbors::{cell_order, CellGrid, NeighborLists};
+use crate::sph::neighbors::{cell_order_and_codes, CellGrid, NeighborLists};
 use crate::sph::{Instability, SphSolver};
 use crate::Real;
 use std::path::Path;
@@ -186,9 +186,9 @@ fn time_neighbor_search(sph: &SphSolver) -> f64 {
     let h = sph.kernel.support();
     let mut x = sph.fluid.x.clone();
     let t0 = Instant::now();
-    let perm = cell_order(&x, h);
+    let (perm, codes) = cell_order_and_codes(&x, h);
     crate::sph::neighbors::permute(&mut x, &perm);
-    let grid = CellGrid::build(&x, h);
+    let grid = CellGrid::from_codes(&x, &codes, h);
     let ff = NeighborLists::build(&x, &grid, &x, &grid, h, true);
     let fb = NeighborLists::build(&x, &grid, &sph.boundary.x, &sph.boundary.grid, h, false);
     let seconds = t0.elapsed().as_secs_f64();

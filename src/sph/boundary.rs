@@ -34,7 +34,7 @@
 
 use super::fluid::{lattice_kernel_sum, plane_kernel_sum_at};
 use super::kernel::CubicSpline;
-use super::neighbors::{cell_order, permute, CellGrid, NeighborLists};
+use super::neighbors::{cell_order_and_codes, permute, CellGrid, NeighborLists};
 use crate::geometry::RigidBody;
 use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
@@ -158,13 +158,13 @@ impl BoundaryParticles {
                     *v = bodies[b].velocity_at(t, &p);
                 }
             });
-        let perm = cell_order(&self.x, self.cell);
+        let (perm, codes) = cell_order_and_codes(&self.x, self.cell);
         permute(&mut self.x, &perm);
         permute(&mut self.v, &perm);
         permute(&mut self.volume, &perm);
         permute(&mut self.body, &perm);
         permute(&mut self.local, &perm);
-        self.grid = CellGrid::build(&self.x, self.cell);
+        self.grid = CellGrid::from_codes(&self.x, &codes, self.cell);
     }
 
     fn compute_volumes(&mut self, kernel: &CubicSpline, spacing: Real) {

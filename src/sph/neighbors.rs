@@ -1,7 +1,7 @@
 //! Neighbour search on the compact hashed uniform grid of [`crate::spatial`]: neighbour lists
 //! built in parallel, cell chunk by cell chunk, into one compressed-row (CSR) array of `u32`.
 
-pub use crate::spatial::{cell_order, permute, resize, CellGrid};
+pub use crate::spatial::{cell_order, cell_order_and_codes, permute, resize, CellGrid};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 

@@ -17,7 +17,7 @@ use super::hooks::{StepContext, StepHook};
 use super::iisph;
 use super::kernel::CubicSpline;
 use super::neighborhood::Neighborhood;
-use super::neighbors::{cell_order, CellGrid, NeighborLists};
+use super::neighbors::{cell_order_and_codes, CellGrid, NeighborLists};
 use super::open::OpenBoundaries;
 use super::operators::{self, Operators, WallField};
 use super::pair_cache::{Densities, PairCache};
@@ -254,12 +254,12 @@ impl SphSolver {
         self.pending_accel = None;
         self.boundary.place(&self.bodies, self.time, false);
         let h = self.kernel.support();
-        let perm = cell_order(&self.fluid.x, h);
+        let (perm, codes) = cell_order_and_codes(&self.fluid.x, h);
         self.fluid.permute(&perm);
         for hook in &mut self.hooks {
             hook.permute(&perm);
         }
-        self.grid = CellGrid::build(&self.fluid.x, h);
+        self.grid = CellGrid::from_codes(&self.fluid.x, &codes, h);
         self.fluid_lists = NeighborLists::build(
             &self.fluid.x,
             &self.grid,

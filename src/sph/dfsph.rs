@@ -94,6 +94,11 @@ pub fn solve(
             }
         }
     };
+    let refresh = |err: &mut [Real], v: &[Vec3], curvature: &[Real]| {
+        err.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, e)| *e = error(i, v, curvature));
+    };
     let inv_dt2 = 1.0 / (dt * dt);
     let mut err: Vec<Real> = (0..n)
         .into_par_iter()
@@ -113,9 +118,7 @@ pub fn solve(
     let mut total = kappa.clone();
     if kappa.iter().any(|&k| k != 0.0) {
         apply(nb, &kappa, v, dt);
-        err.par_iter_mut()
-            .enumerate()
-            .for_each(|(i, e)| *e = error(i, v, &curvature));
+        refresh(&mut err, v, &curvature);
     }
     let mut avg = mean_positive(&err);
     let mut iterations = 0;
@@ -124,9 +127,7 @@ pub fn solve(
     for pass in 0..passes {
         if pass > 0 {
             curvature = curvature_at(v);
-            err.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, e)| *e = error(i, v, &curvature));
+            refresh(&mut err, v, &curvature);
             avg = mean_positive(&err);
         }
         while iterations < bounds.max_iterations
@@ -141,9 +142,7 @@ pub fn solve(
                     *t += *k;
                 });
             apply(nb, &kappa, v, dt);
-            err.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, e)| *e = error(i, v, &curvature));
+            refresh(&mut err, v, &curvature);
             avg = mean_positive(&err);
             iterations += 1;
         }

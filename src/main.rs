@@ -102,7 +102,7 @@ fn main() -> ExitCode {
     // The command runs on a worker of rayon's pool, not on the main thread: a parallel loop
     // started from outside the pool hands its work over and sleeps on a lock until it is done,
     // a wake-up per loop that a small scene pays for every loop of its step (the wind-over-tank
-    // grid alone: 1.6-2.1 -> 1.1-1.5 ms a step). From a worker the loop starts in place.
+    // grid alone: 2.3-2.7 -> 1.3-1.9 ms a step, README). From a worker the loop starts in place.
     // Results are unchanged: every sum is in a fixed order (`parallel.rs`).
     match rayon::scope(|_| run(command)) {
         Ok(()) => ExitCode::SUCCESS,

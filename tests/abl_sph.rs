@@ -138,7 +138,8 @@ fn without_seeding_the_run_is_the_plain_sph_bit_for_bit() {
 }
 
 /// At the first step every particle within the layer (two spacings) of the ball takes the
-/// database's lookup for the ball's velocity at its nearest boundary point; the rest stay zero.
+/// database's lookup for the ball's velocity at its nearest boundary point, over the layer's
+/// thickness (the stored velocity jump as a vorticity); the rest stay zero.
 /// Then, step after step, a particle outside the layer keeps its value exactly as it moves.
 #[test]
 fn the_particles_carry_the_lookup_unchanged() {
@@ -153,8 +154,14 @@ fn the_particles_carry_the_lookup_unchanged() {
     };
     let ball = sph(&p).bodies[1].clone();
     let pose = ball.pose(0.0);
-    // The water is still at t = 0, so the relative motion is the ball's own.
-    let values = layer.values(&pose, &Vec3::new(SPEED, 0.0, 0.0), &Vec3::zeros(), 1.0);
+    // The water is still at t = 0, so the relative motion is the ball's own; gain 1.
+    let thickness = 2.0 * H;
+    let values = layer.values(
+        &pose,
+        &Vec3::new(SPEED, 0.0, 0.0),
+        &Vec3::zeros(),
+        1.0 / thickness,
+    );
     p.step(None, None).expect("steps");
     let after = by_tag(&p);
     let mut attached = 0;
@@ -399,4 +406,131 @@ fn a_database_for_another_obstacle_is_refused() {
     for needle in [fp(RADIUS), fp(0.1)] {
         assert!(e.contains(&needle), "{e} does not name {needle}");
     }
+}
+
+/// The particle budget of the turbulence stage balances every step: the count after a step is
+/// the count before plus the seeded and the children born of splits, less the particles that
+/// split, the merged pairs, the dissipated and those the liquid bounds removed. Eager seeding,
+/// so every term but the merges occurs.
+#[test]
+fn the_vortex_budget_balances_every_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let mut p = built(&text(
+        &common::abl_line(&db),
+        "[turbulence]\nc_p = 1e3\ngain = 0.1",
+    ));
+    let mut count = 0;
+    let mut totals = [0usize; 6];
+    for _ in 0..40 {
+        let rec = p.step(None, None).expect("steps");
+        let t = rec.sph_turbulence.expect("the stage ran");
+        let after = count + t.seeded + t.born;
+        let gone = t.split + t.merged + t.dissipated + t.removed;
+        assert_eq!(after - gone, t.particles, "step {}: {t:?}", rec.step);
+        assert_eq!(
+            t.particles,
+            p.sim.sph_turbulence.as_ref().expect("state").vortices.len()
+        );
+        count = t.particles;
+        for (s, n) in
+            totals
+                .iter_mut()
+                .zip([t.seeded, t.split, t.born, t.dissipated, t.removed, t.merged])
+        {
+            *s += n;
+        }
+    }
+    let [seeded, split, born, dissipated, ..] = totals;
+    assert!(seeded > 10 && split > 0 && dissipated > 0, "{totals:?}");
+    assert_eq!(born, 2 * split, "two children per split");
+}
+
+/// Seeds of the size the river's walls leave room for (2.5 spacings) carried by a uniform SPH
+/// stream: in the inertial range each splits on its Kolmogorov time into two of 2^(-1/3) its
+/// radius, and a child under the dissipation radius is dissipated. At the particle default of
+/// one spacing the seeds live three generations and their count after every step is 2^g, g
+/// the generations whose split time has passed; at the grid's two cells the first split's
+/// children fall under the threshold and the seeds are gone after one split time.
+#[test]
+fn seeds_in_a_uniform_stream_cascade_as_the_rules_predict_at_sph_scale() {
+    use eddy::abl::params::{GRID_DISSIPATION, PARTICLE_DISSIPATION};
+    use eddy::abl::TurbulenceParams;
+    use eddy::vortex::{Dynamics, DynamicsSettings};
+    let h = 0.025;
+    let stream = format!(
+        "name = \"stream\"\ngravity = [0.0, 0.0, 0.0]\n[domain]\nmin = [-0.1, -0.1, -0.1]\n\
+         max = [0.9, 0.5, 0.5]\n[time]\nsteps = 1\n[fluid]\nspacing = {h}\n[[fluid.blocks]]\n\
+         min = [0.0, 0.0, 0.0]\nmax = [0.8, 0.4, 0.4]\nvelocity = [1.0, 0.0, 0.0]\n\
+         [output]\nvtk = false\nmetrics = []\n"
+    );
+    let scene = parse_str(&stream, Path::new("stream.toml"), &[]).expect("scene");
+    let fluid = eddy::pipeline::sph_solver(&scene).expect("solver builds");
+    let source = fluid.velocity_source();
+    let defaults = TurbulenceParams::default();
+    assert_eq!(defaults.dissipation(true), PARTICLE_DISSIPATION);
+    assert_eq!(defaults.dissipation(false), GRID_DISSIPATION);
+    let dt = 2e-3;
+    let birth = 2.5 * h;
+    // The history the rules predict: generation g has radius birth * s^g and splits when its
+    // age, summed step by step as the dynamics sum it, reaches split_time.
+    let predict = |settings: &DynamicsSettings, steps: usize| -> Vec<usize> {
+        let (mut sigma, mut age, mut alive) = (kernel::sigma_for_radius(birth), 0.0, 1);
+        let mut counts = Vec::new();
+        for _ in 0..steps {
+            age += dt;
+            if alive > 0 && age >= settings.split_time(sigma) {
+                sigma *= settings.child_scale;
+                age = 0.0;
+                alive *= settings.children;
+                if kernel::radius(sigma) < settings.dissipation_cells * h {
+                    alive = 0;
+                }
+            }
+            counts.push(alive);
+        }
+        counts
+    };
+    let lifetime = |dissipation: Real| -> (Vec<usize>, Vec<usize>) {
+        let settings = DynamicsSettings {
+            dissipation_cells: dissipation,
+            inertial_radius: defaults.split_radius * h,
+            children: defaults.children,
+            cascade_time: defaults.cascade_time,
+            ..DynamicsSettings::default()
+        };
+        let mut dynamics = Dynamics::new(settings.clone(), 7).expect("settings");
+        let mut v = VortexParticles::new();
+        v.push(
+            Vec3::new(0.2, 0.2, 0.2),
+            Vec3::new(0.0, 0.0, 20.0),
+            kernel::sigma_for_radius(birth),
+        )
+        .expect("a valid vortex");
+        let steps = 120;
+        let counts = (0..steps)
+            .map(|_| {
+                dynamics.step(&mut v, &source, dt, h);
+                v.len()
+            })
+            .collect();
+        (counts, predict(&settings, steps))
+    };
+    let (counts, predicted) = lifetime(PARTICLE_DISSIPATION);
+    assert_eq!(counts, predicted);
+    assert_eq!(
+        counts.iter().max(),
+        Some(&8),
+        "three generations: {counts:?}"
+    );
+    let lived = counts.iter().filter(|&&n| n > 0).count();
+    let (counts, predicted) = lifetime(GRID_DISSIPATION);
+    assert_eq!(counts, predicted);
+    assert_eq!(
+        counts.iter().max(),
+        Some(&1),
+        "no child survives: {counts:?}"
+    );
+    let died = counts.iter().filter(|&&n| n > 0).count();
+    assert!(lived > 3 * died, "{lived} steps against {died}");
 }

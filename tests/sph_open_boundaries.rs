@@ -428,3 +428,50 @@ fn laminar_flow_between_plates_approaches_the_parabola() {
         "not peaked in the middle: {speed:?}"
     );
 }
+
+/// The river of `scenes/abl_sph_river.toml` with its three pillars and its turbulence taken
+/// out, the natural baseline for its wakes (issue 46 saw a particle leave through the bed near
+/// the inflow corner at t = 0.16 s): it runs its 3 s with every fluid particle inside the
+/// domain, the water's count held by the inflow and the outflow, and no particle faster than
+/// the stream plus a free fall over the domain's height (an energy bound an instability
+/// breaks).
+#[test]
+fn the_river_without_pillars_runs_its_three_seconds() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/abl_sph_river.toml");
+    let text = std::fs::read_to_string(&path).expect("the river scene");
+    let blocks: Vec<&str> = text.split("\n\n").collect();
+    let kept: Vec<&str> = blocks
+        .iter()
+        .copied()
+        .filter(|b| !b.contains("name = \"pillar_") && !b.contains("[turbulence]"))
+        .collect();
+    assert_eq!(
+        blocks.len() - kept.len(),
+        4,
+        "three pillars and [turbulence]"
+    );
+    let scene = parse_str(&kept.join("\n\n"), &path, &[]).expect("the river without pillars");
+    let mut p = eddy::pipeline::Pipeline::build(&scene).expect("builds");
+    let (lo, hi) = (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max));
+    let start = p.sim.sph.as_ref().expect("SPH").fluid.len();
+    let mut fastest: Real = 0.0;
+    while p.sim.time() < 3.0 - 1e-9 {
+        p.step(Some(3.0), None).expect("the river runs");
+        let s = p.sim.sph.as_ref().expect("SPH");
+        for x in &s.fluid.x {
+            assert!(
+                (0..3).all(|a| x[a] >= lo[a] && x[a] <= hi[a]),
+                "a particle left the domain at {x:?}, t = {}",
+                p.sim.time()
+            );
+        }
+        fastest = fastest.max(s.fluid.v.iter().map(|v| v.norm()).fold(0.0, Real::max));
+    }
+    let n = p.sim.sph.as_ref().expect("SPH").fluid.len();
+    assert!(
+        n as Real > 0.9 * start as Real && (n as Real) < 1.1 * start as Real,
+        "{start} particles at the start, {n} at 3 s"
+    );
+    let fall = (2.0 * 9.81 * (hi.y - lo.y)).sqrt();
+    assert!(fastest < 1.0 + fall, "{fastest} m/s in a 1 m/s river");
+}

@@ -8,6 +8,7 @@
 //! u0 = 1.0             # |U_0| of Eq. 8, m/s (default: the inflow speed, else the obstacle's)
 //! gain = 1.0           # scales the database's omega_pre (Table 1's beta)
 //! r_max = 6.0          # largest seeded particle radius, cells
+//! dissipation_radius = 2.0  # cells; default 2 on a grid, 1 spacing on SPH particles
 //! seeding = "abl"      # or "random": the baseline of Figure 8, middle
 //! ```
 
@@ -42,15 +43,22 @@ pub struct TurbulenceParams {
     /// obstacle's; a scene with neither must set it.
     #[serde(default)]
     pub u0: Option<Real>,
-    /// Factor on the database's omega_pre (Table 1's beta, applied at run time).
+    /// Factor on the database's omega_pre (Table 1's beta, applied at run time). The stored
+    /// omega_pre = U(x + l n) x n is the velocity jump across the boundary layer (Figure 5), a
+    /// circulation per unit of wall area; the wall-attached layer holds it as the vorticity
+    /// `gain omega_pre / thickness`, the thickness being one cell on a grid and
+    /// [`LAYER_SPACINGS`] spacings on particles. So Eq. 8's `l_m |omega_ABL| / |U_0|` and the
+    /// seeds' strengths are the same at any resolution: the paper's grid units, where a cell is
+    /// the unit of length.
     #[serde(default = "d_one")]
     pub gain: Real,
     /// Largest radius `sqrt(6) sigma` of a seeded particle, in cells (section 4.3: 6).
     #[serde(default = "d_r_max")]
     pub r_max: Real,
-    /// Particles with a smaller radius are dissipated, in cells (section 4.2: 2).
-    #[serde(default = "d_dissipation")]
-    pub dissipation_radius: Real,
+    /// Particles with a smaller radius are dissipated, in cells or spacings. Default: 2 cells
+    /// on a grid (section 4.2), 1 spacing on SPH particles ([`TurbulenceParams::dissipation`]).
+    #[serde(default)]
+    pub dissipation_radius: Option<Real>,
     /// Particles with a radius at most this (cells) are in the inertial subrange and split;
     /// larger ones merge (section 4.2, energy transfer).
     #[serde(default = "d_split")]
@@ -79,9 +87,6 @@ fn d_one() -> Real {
 fn d_r_max() -> Real {
     6.0
 }
-fn d_dissipation() -> Real {
-    2.0
-}
 fn d_split() -> Real {
     3.0
 }
@@ -90,6 +95,32 @@ fn d_children() -> usize {
 }
 fn d_upsample() -> usize {
     1
+}
+
+/// Thickness of the wall-attached layer on SPH particles, in spacings: the particles within
+/// the kernel support of a wall (the particles that feel it).
+pub const LAYER_SPACINGS: Real = 2.0;
+
+/// Default dissipation radius on a grid, cells (section 4.2: "a threshold of 2 dx").
+pub const GRID_DISSIPATION: Real = 2.0;
+
+/// Default dissipation radius on SPH particles, spacings. The paper's river (Figure 10) ran its
+/// vortex particles on a lattice twice as fine as the flow (Table 1, ABL upscaling 2), so its
+/// 2-cell threshold is one flow cell; on particles the kernels are sampled exactly at every
+/// particle, with no face average to blur them. At 2 spacings the seeds near the river's walls
+/// were born at the threshold (71 % within 1/8 of it) and their first split's children were
+/// dissipated at once: 5 particles alive against 171 at 1 spacing (README, SPH scenes).
+pub const PARTICLE_DISSIPATION: Real = 1.0;
+
+impl TurbulenceParams {
+    /// The dissipation radius in cells (a grid) or spacings (`on_particles`).
+    pub fn dissipation(&self, on_particles: bool) -> Real {
+        self.dissipation_radius.unwrap_or(if on_particles {
+            PARTICLE_DISSIPATION
+        } else {
+            GRID_DISSIPATION
+        })
+    }
 }
 
 impl Default for TurbulenceParams {

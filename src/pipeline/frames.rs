@@ -104,8 +104,10 @@ impl ParticleFrames {
         Ok(Self(Writers::new(out, vtk, "particles", hdf5)))
     }
 
-    /// Position, velocity, density, pressure, the hooks' fields and the carried fields, and in
-    /// the HDF5 frame the fluid's vortex particles as the group `vortices`.
+    /// Position, velocity, vorticity (the solver's curl of the velocity, 1/s: a wake shows in
+    /// ParaView without post-processing), density, pressure, the hooks' fields and the carried
+    /// fields (`abl_vorticity` with a boundary layer), and in the HDF5 frame the fluid's vortex
+    /// particles as the group `vortices`.
     pub fn write(
         &mut self,
         solver: &SphSolver,
@@ -116,12 +118,14 @@ impl ParticleFrames {
             return Ok(());
         }
         let f = &solver.fluid;
+        let omega = solver.vorticity();
         let mut frame = ParticleFrame {
             step: solver.steps(),
             time: solver.time(),
             positions: &f.x,
             fields: vec![
                 Field::vector("velocity", &f.v),
+                Field::vector("vorticity", &omega),
                 Field::scalar("density", &f.density),
                 Field::scalar("pressure", &f.pressure),
             ],

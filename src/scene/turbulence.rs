@@ -78,7 +78,7 @@ impl Scene {
                     "an obstacle with `abl = { database = \"...\" }` for it to act on",
                 ));
             }
-            check_params(c, t)?;
+            check_params(c, t, self.grid.is_none())?;
             if t.upsample != 1 && self.grid.is_none() {
                 return Err(c.invalid(
                     "turbulence.upsample",
@@ -100,21 +100,23 @@ impl Scene {
     }
 }
 
-fn check_params(c: &Checker, t: &TurbulenceParams) -> Result<(), SceneError> {
+/// `on_particles`: the stage drives SPH particles (a scene without a grid).
+fn check_params(c: &Checker, t: &TurbulenceParams, on_particles: bool) -> Result<(), SceneError> {
     c.num("turbulence.c_p", t.c_p, Interval::ge(0.0).note("1/s"))?;
     if let Some(u0) = t.u0 {
         c.num("turbulence.u0", u0, Interval::gt(0.0).note("m/s"))?;
     }
     c.num("turbulence.gain", t.gain, Interval::ge(0.0))?;
+    let dissipation = t.dissipation(on_particles);
     c.num(
         "turbulence.dissipation_radius",
-        t.dissipation_radius,
+        dissipation,
         Interval::ge(0.0).note("cells"),
     )?;
     c.num(
         "turbulence.r_max",
         t.r_max,
-        Interval::ge(t.dissipation_radius.max(0.5))
+        Interval::ge(dissipation.max(0.5))
             .note("cells, at least the dissipation radius (smaller particles would vanish)"),
     )?;
     c.num(

@@ -234,11 +234,15 @@ pub fn random_unit(rng: &mut ChaCha8Rng) -> Vec3 {
     Vec3::new(s * phi.cos(), s * phi.sin(), z)
 }
 
-/// What one dynamics step did.
+/// What one dynamics step did: the count changes by `born - split - merged - dissipated`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct StepReport {
     pub dissipated: usize,
+    /// Particles that split.
     pub split: usize,
+    /// Children born of the splits.
+    pub born: usize,
+    /// Pairs merged into one.
     pub merged: usize,
 }
 
@@ -277,6 +281,7 @@ impl Dynamics {
         StepReport {
             dissipated,
             split,
+            born: split * self.settings.children,
             merged,
         }
     }

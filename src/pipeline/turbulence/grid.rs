@@ -15,7 +15,9 @@
 
 use ndarray::Array3;
 
-use super::{push_seeds, Common, Laps, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER};
+use super::{
+    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER,
+};
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
 use crate::grid::advect::{advect_band_into, Band};
@@ -118,7 +120,13 @@ impl GridTurbulence {
         scheme: Advection,
     ) -> Result<Self, RunError> {
         let grid = sim.grid.as_ref().expect("turbulence is built for a grid");
-        let common = Common::build(settings, shapes, &grid.bodies, grid.mac.dx)?;
+        let dx = grid.mac.dx;
+        let res = Resolution {
+            dx,
+            thickness: dx,
+            on_particles: false,
+        };
+        let common = Common::build(settings, shapes, &grid.bodies, res)?;
         let moving = grid.bodies.iter().any(|b| b.is_moving());
         sim.grid_turbulence = Some(Turbulence {
             abl: Some(std::array::from_fn(|_| Array3::zeros(grid.mac.dims))),
@@ -138,7 +146,7 @@ impl GridTurbulence {
     /// Lines 2–6: the wall-attached layer of every obstacle into `abl`.
     fn attach(&mut self, grid: &GridSolver, abl: &mut [Array3<Real>; 3]) {
         let t = grid.time();
-        let gain = self.common.settings.params.gain;
+        let scale = self.common.scale();
         for (o, cells) in self.common.obstacles.iter().zip(&mut self.cells) {
             let body = &grid.bodies[o.body];
             if cells.attached.is_empty() || self.moving {
@@ -155,7 +163,7 @@ impl GridTurbulence {
                 cells.shell =
                     shell_cells(grid, o.body, SHELL_INNER * o.reach, SHELL_OUTER * o.reach);
             }
-            let values = o.values(body, t, mean_velocity(grid, &cells.shell), gain);
+            let values = o.values(body, t, mean_velocity(grid, &cells.shell), scale);
             for (&c, &p) in cells.attached.iter().zip(&cells.nearest) {
                 let pre = values[p];
                 let now = Vec3::new(abl[0][c], abl[1][c], abl[2][c]);
@@ -289,9 +297,7 @@ impl Stage for GridTurbulence {
             .common
             .dynamics
             .step(&mut state.vortices, &grid.mac, dt, grid.mac.dx);
-        stats.split = report.split;
-        stats.merged = report.merged;
-        stats.dissipated = report.dissipated;
+        stats.dynamics(report);
         laps.lap(3);
         let upsample = self.common.settings.params.upsample;
         match grid.lend_fine_velocity() {

@@ -29,6 +29,7 @@ use super::RunError;
 use crate::abl::seeding::{Seed, SeedingParams};
 use crate::abl::{AblDatabase, AblSettings, Seeding, WallLayer};
 use crate::geometry::{RigidBody, Shape};
+use crate::vortex::dynamics::StepReport;
 use crate::vortex::{Dynamics, DynamicsSettings, VortexParticles};
 use crate::{Real, Vec3};
 
@@ -51,14 +52,21 @@ pub struct Turbulence {
     pub parts: &'static [&'static str; 5],
 }
 
-/// What the turbulence stage did in one step.
+/// What the turbulence stage did in one step: the particle budget balances,
+/// `particles = previous + seeded + born - split - merged - dissipated - removed`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TurbulenceStats {
     pub seeded: usize,
+    /// Particles that split (each into `children`).
     pub split: usize,
+    /// Children born of the splits.
+    pub born: usize,
+    /// Pairs merged into one.
     pub merged: usize,
-    /// Particles dissipated below the dissipation radius, or (SPH) centred outside the liquid.
+    /// Particles dissipated below the dissipation radius (section 4.2).
     pub dissipated: usize,
+    /// (SPH) particles removed by the liquid bounds: centred outside the liquid (section 6).
+    pub removed: usize,
     /// Particles after the step's dynamics.
     pub particles: usize,
     /// Total kernel energy of the particles, m^5/s^2.
@@ -70,12 +78,14 @@ pub struct TurbulenceStats {
 }
 
 /// Columns of the turbulence stage in `metrics.csv`, then one `*_seconds` per part.
-const COLUMNS: [&str; 7] = [
+const COLUMNS: [&str; 9] = [
     "vortex_particles",
     "seeded",
     "split",
+    "born",
     "merged",
     "dissipated",
+    "removed",
     "vortex_energy",
     "abl_magnitude_sum",
 ];
@@ -93,8 +103,8 @@ impl Turbulence {
 
     /// The plan's note on the metrics columns it adds.
     pub fn describe_columns(&self) -> &'static str {
-        "vortex particles, seeded, split, merged, dissipated, vortex energy, ABL magnitude sum, \
-         turbulence part times"
+        "vortex particles and their budget (seeded, split, born, merged, dissipated, removed), \
+         vortex energy, ABL magnitude sum, turbulence part times"
     }
 }
 
@@ -105,14 +115,24 @@ impl TurbulenceStats {
             self.particles,
             self.seeded,
             self.split,
+            self.born,
             self.merged,
             self.dissipated,
+            self.removed,
         ]
         .map(|n| n as Real)
         .to_vec();
         row.extend([self.energy, self.abl_sum]);
         row.extend(self.seconds);
         row
+    }
+
+    /// Records what the vortex dynamics did.
+    fn dynamics(&mut self, report: StepReport) {
+        self.split = report.split;
+        self.born = report.born;
+        self.merged = report.merged;
+        self.dissipated = report.dissipated;
     }
 }
 
@@ -127,11 +147,11 @@ struct Obstacle {
 
 impl Obstacle {
     /// omega_pre at its boundary points in the world frame at time `t`, for the obstacle moving
-    /// relative to the `ambient` flow (see the module documentation).
-    fn values(&self, body: &RigidBody, t: Real, ambient: Option<Vec3>, gain: Real) -> Vec<Vec3> {
+    /// relative to the `ambient` flow (see the module documentation), times `scale`.
+    fn values(&self, body: &RigidBody, t: Real, ambient: Option<Vec3>, scale: Real) -> Vec<Vec3> {
         let linear = body.linear_velocity(t) - ambient.unwrap_or_else(Vec3::zeros);
         self.layer
-            .values(&body.pose(t), &linear, &body.angular_velocity(t), gain)
+            .values(&body.pose(t), &linear, &body.angular_velocity(t), scale)
     }
 }
 
@@ -145,17 +165,32 @@ struct Common {
     /// The cell size or particle spacing the radii of [`crate::abl::TurbulenceParams`] count
     /// in, m.
     dx: Real,
+    /// Thickness of the wall-attached layer, m (see [`crate::abl::TurbulenceParams::gain`]).
+    thickness: Real,
+    /// The dissipation radius, cells or spacings.
+    dissipation: Real,
+}
+
+/// How the solver a stage drives resolves the flow.
+struct Resolution {
+    /// Cell size or particle spacing, m.
+    dx: Real,
+    /// Thickness of the wall-attached layer, m.
+    thickness: Real,
+    /// Whether the samples are SPH particles (for the default dissipation radius).
+    on_particles: bool,
 }
 
 impl Common {
     /// Opens every database of `settings` (checking it belongs to its obstacle in `shapes`) for
-    /// a solver with cell size or spacing `dx` among `bodies`.
+    /// a solver of resolution `res` among `bodies`.
     fn build(
         settings: AblSettings,
         shapes: &[Shape],
         bodies: &[RigidBody],
-        dx: Real,
+        res: Resolution,
     ) -> Result<Self, RunError> {
+        let dx = res.dx;
         let mut obstacles = Vec::new();
         for (body, path) in &settings.databases {
             let db = AblDatabase::open(path, Some(&shapes[*body]))?;
@@ -168,9 +203,10 @@ impl Common {
             });
         }
         let p = &settings.params;
+        let dissipation = p.dissipation(res.on_particles);
         let dynamics = Dynamics::new(
             DynamicsSettings {
-                dissipation_cells: p.dissipation_radius,
+                dissipation_cells: dissipation,
                 inertial_radius: p.split_radius * dx,
                 children: p.children,
                 cascade_time: p.cascade_time,
@@ -184,7 +220,15 @@ impl Common {
             obstacles,
             dynamics,
             dx,
+            thickness: res.thickness,
+            dissipation,
         })
+    }
+
+    /// The factor on omega_pre that gives the wall-attached layer's vorticity, 1/m: the gain
+    /// over the layer's thickness.
+    fn scale(&self) -> Real {
+        self.settings.params.gain / self.thickness
     }
 
     /// Eq. 8's parameters in metres.
@@ -194,7 +238,7 @@ impl Common {
             c_p: p.c_p,
             u0: self.settings.u0,
             r_max: p.r_max * self.dx,
-            r_min: p.dissipation_radius * self.dx,
+            r_min: self.dissipation * self.dx,
         }
     }
 
@@ -225,7 +269,10 @@ impl Common {
                 names.join(", ")
             ),
             [
-                format!("lookup per obstacle, gain {}", p.gain),
+                format!(
+                    "lookup per obstacle, gain {} over a layer {:.3e} m thick",
+                    p.gain, self.thickness
+                ),
                 format!(
                     "{seeding}: c_p = {} 1/s, |U_0| = {} m/s, r_max = {} {unit}",
                     p.c_p, self.settings.u0, p.r_max
@@ -233,7 +280,7 @@ impl Common {
                 format!(
                     "advect, stretch, merge, split at radius <= {} {unit} into {}, dissipate \
                      below {} {unit}",
-                    p.split_radius, p.children, p.dissipation_radius
+                    p.split_radius, p.children, self.dissipation
                 ),
             ],
         )

@@ -27,7 +27,10 @@
 
 use rayon::prelude::*;
 
-use super::{push_seeds, Common, Laps, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER};
+use super::{
+    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER,
+};
+use crate::abl::params::LAYER_SPACINGS;
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
 use crate::pipeline::simulation::{Simulation, StepError};
@@ -52,7 +55,7 @@ pub const PARTS: [&str; 5] = [
 pub const ABL_FIELD: &str = "abl_vorticity";
 
 /// Thickness of the wall-attached layer, in particle spacings: the kernel support.
-pub const LAYER: Real = 2.0;
+pub const LAYER: Real = LAYER_SPACINGS;
 
 /// The stage (see the module documentation).
 pub struct SphTurbulence {
@@ -70,7 +73,12 @@ impl SphTurbulence {
         shapes: &[crate::geometry::Shape],
     ) -> Result<Self, RunError> {
         let sph = sim.sph.as_mut().expect("turbulence is built for a fluid");
-        let common = Common::build(settings, shapes, &sph.bodies, sph.spacing)?;
+        let res = Resolution {
+            dx: sph.spacing,
+            thickness: LAYER * sph.spacing,
+            on_particles: true,
+        };
+        let common = Common::build(settings, shapes, &sph.bodies, res)?;
         let field = sph.fluid.carry(ABL_FIELD);
         sim.sph_turbulence = Some(Turbulence {
             abl: None,
@@ -83,7 +91,7 @@ impl SphTurbulence {
     /// Lines 2–6: the wall-attached layer of every obstacle into the carried field.
     fn attach(&self, sph: &mut SphSolver) {
         let t = sph.time();
-        let gain = self.common.settings.params.gain;
+        let scale = self.common.scale();
         let layer = LAYER * sph.spacing;
         for o in &self.common.obstacles {
             let body = &sph.bodies[o.body];
@@ -92,7 +100,7 @@ impl SphTurbulence {
                 continue;
             }
             let shell = sph.particles_near(o.body, SHELL_INNER * o.reach, SHELL_OUTER * o.reach);
-            let values = o.values(body, t, sph.mean_velocity(&shell), gain);
+            let values = o.values(body, t, sph.mean_velocity(&shell), scale);
             let inverse = body.pose(t).inverse();
             let nearest: Vec<usize> = attached
                 .par_iter()
@@ -276,10 +284,9 @@ impl Stage for SphTurbulence {
             self.common
                 .dynamics
                 .step(&mut state.vortices, &sph.velocity_source(), dt, sph.spacing);
-        stats.split = report.split;
-        stats.merged = report.merged;
+        stats.dynamics(report);
         laps.lap(2);
-        stats.dissipated = report.dissipated + fit_to_liquid(&mut state.vortices, sph, &surface);
+        stats.removed = fit_to_liquid(&mut state.vortices, sph, &surface);
         laps.lap(3);
         synthesize(&state.vortices, sph, 1)?;
         laps.lap(4);

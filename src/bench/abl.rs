@@ -1,8 +1,10 @@
 //! `eddy bench-abl`: run time against error for the artificial boundary layers, the protocol of
-//! Pfaff et al. 2009, Figure 8. The backward-facing step at its coarse resolution with
-//! boundary-layer seeding (`abl`), with the same particles seeded at random along the walls
-//! (`random`), and with no turbulence (`none`), against the plain run at `scale` times the
-//! resolution (`reference`).
+//! Pfaff et al. 2009, Figure 8. A scene at its coarse resolution with boundary-layer seeding
+//! (`abl`), with the same particles seeded at random along the walls (`random`), and with no
+//! turbulence (`none`), against the plain run at `scale` times the resolution (`reference`).
+//! On a grid the scene is the backward-facing step (below); on SPH particles a stream past
+//! obstacles in a channel, measured as [`super::abl_particles`] says, the reference at
+//! `1/scale` the spacing.
 //!
 //! **Measure.** At stations behind the step, each run accumulates over time (from the scene's
 //! `grid.average_from`) and over the periodic span the mean and mean square of every velocity
@@ -18,6 +20,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use ndarray::Array2;
 
+use super::abl_particles::{default_stations, Bins, ParticleStations};
 use crate::io::plot::{error_figure, CurvePanel, ErrorPoint};
 use crate::io::{CsvSeries, IoError};
 use crate::pipeline::{Pipeline, RunError};
@@ -27,10 +30,15 @@ use crate::Real;
 /// What `eddy bench-abl` measures.
 #[derive(Debug, Clone)]
 pub struct AblBenchOptions {
-    /// Resolution factor of the reference run.
-    pub scale: usize,
-    /// Stations behind the step, m along x.
+    /// Resolution factor of the reference run (default 4 on a grid, 2 on particles: 8 times
+    /// the particles).
+    pub scale: Option<usize>,
+    /// Stations behind the obstacles, m along x (default: the step's five on a grid, two and
+    /// four obstacle lengths behind each obstacle with a database on particles).
     pub stations: Vec<Real>,
+    /// Statistics from this time, s (default: the grid's `average_from`, half the run on
+    /// particles).
+    pub from: Option<Real>,
     /// Overrides applied to every run (`--set`).
     pub overrides: Vec<String>,
     /// Skip the reference (its profiles are then compared with nothing).
@@ -55,11 +63,16 @@ pub struct AblBenchRow {
     pub label: &'static str,
     /// The scene seed of the run.
     pub seed: u64,
+    /// Grid cells, or fluid particles at the start.
     pub cells: usize,
     pub steps: u64,
     pub seconds: f64,
     /// Vortex particles at the end.
     pub particles: usize,
+    /// Vortex particles on average over the statistics' window.
+    pub mean_particles: Real,
+    /// Why the run stopped early, if it did (its statistics then cover what it ran).
+    pub failed: Option<String>,
     /// Mean of k over the bins (the mean of U is fixed by the flux through the section).
     pub mean_k: Real,
     /// Errors against the reference (NaN for the reference itself or without one).
@@ -67,8 +80,64 @@ pub struct AblBenchRow {
     pub k_error: Real,
 }
 
-/// Per station, per coarse y bin: the time-averaged streamwise velocity U and k.
-type Profiles = Vec<Vec<(Real, Real)>>;
+/// Per station, per coarse bin (y on a grid, z on particles): the time-averaged streamwise
+/// velocity U and k.
+pub type Profiles = Vec<Vec<(Real, Real)>>;
+
+/// The statistics a run accumulates, on grid cells or fluid particles.
+enum Sampler {
+    Grid(Stations, usize),
+    Particles(ParticleStations),
+}
+
+impl Sampler {
+    fn add(&mut self, p: &Pipeline, dt: Real) {
+        match self {
+            Sampler::Grid(s, _) => s.add(p, dt),
+            Sampler::Particles(s) => s.add(p, dt),
+        }
+    }
+
+    fn profiles(&self) -> Profiles {
+        match self {
+            Sampler::Grid(s, rows) => s.profiles(*rows),
+            Sampler::Particles(s) => s.profiles(),
+        }
+    }
+}
+
+/// The coarse bins of a comparison.
+#[derive(Debug, Clone, Copy)]
+enum Coarse {
+    /// A grid's cell size and rows in y.
+    Grid(Real, usize),
+    /// Particle bins across the channel.
+    Particles(Bins),
+}
+
+impl Coarse {
+    fn bins(&self) -> usize {
+        match self {
+            Coarse::Grid(_, rows) => *rows,
+            Coarse::Particles(b) => b.count,
+        }
+    }
+
+    /// The centre of bin `b`, m.
+    fn centre(&self, b: usize) -> Real {
+        match self {
+            Coarse::Grid(size, _) => (b as Real + 0.5) * size,
+            Coarse::Particles(bins) => bins.origin + (b as Real + 0.5) * bins.size,
+        }
+    }
+
+    fn sampler(&self, p: &Pipeline, stations: &[Real]) -> Sampler {
+        match self {
+            Coarse::Grid(size, rows) => Sampler::Grid(Stations::new(p, stations, *size), *rows),
+            Coarse::Particles(bins) => Sampler::Particles(ParticleStations::new(stations, *bins)),
+        }
+    }
+}
 
 /// Time-and-span statistics of the velocity at the stations: per station, per (x, y) cell of
 /// the run's grid, sums of u_i dt and u_i^2 dt over the span, and the time they cover.
@@ -147,21 +216,25 @@ impl Stations {
     }
 }
 
-/// Runs one configuration to the scene's end, timing the steps; returns the row (without
-/// errors) and its profiles.
+/// Runs one configuration to the scene's end (or until it fails: the row then says why),
+/// timing the steps; returns the row (without errors) and its profiles.
 fn measure(
     label: &'static str,
     scene: &Scene,
     stations: &[Real],
-    coarse: (Real, usize),
+    coarse: Coarse,
+    from: Real,
 ) -> Result<(AblBenchRow, Profiles), RunError> {
     let mut p = Pipeline::build(scene)?;
-    let grid = scene.grid.as_ref().expect("the step scene has a grid");
-    let from = grid.average_from.unwrap_or(0.0);
     let end = scene.time.end.ok_or_else(|| {
         RunError::Unsupported("bench-abl: the scene needs a time.end to average up to".into())
     })?;
-    let mut stats = Stations::new(&p, stations, coarse.0);
+    let cells = match (&scene.grid, &p.sim.sph) {
+        (Some(grid), _) => grid.resolution.iter().product(),
+        (None, Some(sph)) => sph.fluid.len(),
+        (None, None) => 0,
+    };
+    let mut stats = coarse.sampler(&p, stations);
     let bar = ProgressBar::new(1000).with_message(label);
     bar.set_style(
         ProgressStyle::with_template(
@@ -169,35 +242,54 @@ fn measure(
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    let vortices = |p: &Pipeline| {
+        let t = p
+            .sim
+            .grid_turbulence
+            .as_ref()
+            .or(p.sim.sph_turbulence.as_ref());
+        t.map_or(0, |t| t.vortices.len())
+    };
     let started = Instant::now();
-    let mut steps = 0;
+    let (mut steps, mut failed) = (0, None);
+    let (mut counted, mut window) = (0.0, 0.0);
     while p.sim.time() < end - 1e-12 {
-        let rec = p
-            .step(Some(end), None)
-            .map_err(|e| RunError::Unsupported(format!("bench-abl: {label} run failed: {e}")))?;
+        let rec = match p.step(Some(end), None) {
+            Ok(rec) => rec,
+            Err(e) => {
+                failed = Some(e.to_string());
+                break;
+            }
+        };
         steps += 1;
         bar.set_position((1000.0 * p.sim.time() / end) as u64);
         if rec.time + rec.dt > from {
-            stats.add(&p, rec.dt.min(rec.time + rec.dt - from));
+            let dt = rec.dt.min(rec.time + rec.dt - from);
+            stats.add(&p, dt);
+            counted += vortices(&p) as Real * dt;
+            window += dt;
         }
     }
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let profiles = stats.profiles(coarse.1);
-    let bins: Vec<(Real, Real)> = profiles.iter().flatten().copied().collect();
-    let mean_k = bins.iter().map(|b| b.1).sum::<Real>() / bins.len() as Real;
+    let profiles = stats.profiles();
+    let bins: Vec<Real> = profiles
+        .iter()
+        .flatten()
+        .map(|b| b.1)
+        .filter(|k| k.is_finite())
+        .collect();
+    let mean_k = bins.iter().sum::<Real>() / bins.len() as Real;
     Ok((
         AblBenchRow {
             label,
             seed: scene.seed,
-            cells: grid.resolution.iter().product(),
+            cells,
             steps,
             seconds,
-            particles: p
-                .sim
-                .grid_turbulence
-                .as_ref()
-                .map_or(0, |t| t.vortices.len()),
+            particles: vortices(&p),
+            mean_particles: if window > 0.0 { counted / window } else { 0.0 },
+            failed,
             mean_k,
             u_error: Real::NAN,
             k_error: Real::NAN,
@@ -213,8 +305,11 @@ fn plain(mut scene: Scene) -> Scene {
     scene
 }
 
-/// Runs the four configurations of `path` (the backward-facing step) and returns the table
-/// rows: none, random, abl, then the reference.
+/// The step's stations on a grid, m along x.
+pub const GRID_STATIONS: [Real; 5] = [1.25, 1.5, 2.0, 2.5, 3.0];
+
+/// Runs the four configurations of `path` (the backward-facing step on a grid, a stream past
+/// obstacles on particles) and returns the table rows: none, random, abl, then the reference.
 pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, RunError> {
     let load = |extra: &[String]| -> Result<Scene, RunError> {
         let mut all = options.overrides.clone();
@@ -222,13 +317,49 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         Ok(scene::load(path, &all)?)
     };
     let base = load(&[])?;
-    let grid = base
-        .grid
-        .as_ref()
-        .ok_or_else(|| RunError::Unsupported(format!("{} has no [grid]", path.display())))?;
-    let n = grid.resolution;
-    let coarse = (grid.spacing(&base), n[1]);
-    let s = options.scale;
+    if scene::build::abl_settings(&base).is_none() {
+        return Err(RunError::Unsupported(format!(
+            "bench-abl: {} has no obstacle with `abl = {{ database = ... }}`",
+            path.display()
+        )));
+    }
+    let on_particles = base.grid.is_none();
+    let end = base.time.end.unwrap_or(0.0);
+    let (coarse, reference_override, stations, from) = match (&base.grid, &base.fluid) {
+        (Some(grid), _) => {
+            let n = grid.resolution;
+            let s = options.scale.unwrap_or(4);
+            (
+                Coarse::Grid(grid.spacing(&base), n[1]),
+                format!("grid.resolution=[{},{},{}]", n[0] * s, n[1] * s, n[2] * s),
+                GRID_STATIONS.to_vec(),
+                grid.average_from.unwrap_or(0.0),
+            )
+        }
+        (None, Some(fluid)) => {
+            let s = options.scale.unwrap_or(2);
+            let bins = Bins::across(&base).expect("a fluid");
+            let stations = default_stations(&base, &Pipeline::build(&base)?);
+            (
+                Coarse::Particles(bins),
+                format!("fluid.spacing={}", fluid.spacing / s as Real),
+                stations,
+                0.5 * end,
+            )
+        }
+        (None, None) => {
+            return Err(RunError::Unsupported(format!(
+                "{} has neither [grid] nor [fluid]",
+                path.display()
+            )))
+        }
+    };
+    let stations = if options.stations.is_empty() {
+        stations
+    } else {
+        options.stations.clone()
+    };
+    let from = options.from.unwrap_or(from);
     let seeded =
         |label: &'static str, extra: Vec<String>| -> Vec<(&'static str, Result<Scene, RunError>)> {
             (0..options.seeds.max(1))
@@ -241,7 +372,10 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         };
     // The plain run is random only through a fluctuating inflow: then it is repeated per seed
     // too, so every label sees the same inflows.
-    let gusty = grid.inflow_turbulence.is_some();
+    let gusty = base
+        .grid
+        .as_ref()
+        .is_some_and(|g| g.inflow_turbulence.is_some());
     let none: Vec<_> = if gusty {
         seeded("none", Vec::new())
     } else {
@@ -255,18 +389,8 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         .collect::<Vec<_>>()
         .into_iter()
         .chain(
-            (!options.skip_reference && options.reference.is_none()).then(|| {
-                (
-                    "reference",
-                    load(&[format!(
-                        "grid.resolution=[{},{},{}]",
-                        n[0] * s,
-                        n[1] * s,
-                        n[2] * s
-                    )])
-                    .map(plain),
-                )
-            }),
+            (!options.skip_reference && options.reference.is_none())
+                .then(|| ("reference", load(std::slice::from_ref(&reference_override)).map(plain))),
         )
         .map(|(l, r)| r.map(|sc| (l, sc)))
         .collect::<Result<_, _>>()?;
@@ -274,12 +398,12 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     let stored = options
         .reference
         .as_ref()
-        .map(|path| read_profiles(path, options.stations.len(), coarse.1))
+        .map(|path| read_profiles(path, stations.len(), coarse.bins()))
         .transpose()?;
     let mut rows = Vec::new();
     let mut profiles = Vec::new();
     for (label, scene) in &configs {
-        let (row, prof) = measure(label, scene, &options.stations, coarse)?;
+        let (row, prof) = measure(label, scene, &stations, coarse, from)?;
         rows.push(row);
         profiles.push(prof);
     }
@@ -296,7 +420,7 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
             } else {
                 format!("{}.csv", row.label)
             };
-            write_profiles(&dir.join(name), prof, &options.stations, coarse.0)?;
+            write_profiles(&dir.join(name), prof, &stations, coarse)?;
         }
     }
     let reference = match stored {
@@ -307,10 +431,12 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     if let Some(reference) = &reference {
         let u0 = base.turbulence_u0().unwrap_or(1.0);
         for (row, prof) in rows.iter_mut().zip(&profiles) {
+            // Bins no particle reached in one of the two runs are left out.
             let pairs: Vec<_> = prof
                 .iter()
                 .flatten()
                 .zip(reference.iter().flatten())
+                .filter(|(a, b)| a.0.is_finite() && b.0.is_finite())
                 .collect();
             let rms = |f: &dyn Fn(&(Real, Real)) -> Real| {
                 (pairs
@@ -333,12 +459,13 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
                 errors: vec![r.u_error, r.k_error],
             })
             .collect();
-        let middle = options.stations.len() / 2;
+        let middle = stations.len() / 2;
         let profile = |label: &str, prof: &Profiles| {
             let curve = prof[middle]
                 .iter()
                 .enumerate()
-                .map(|(b, &(u, _))| ((b as Real + 0.5) * coarse.0, u))
+                .filter(|(_, &(u, _))| u.is_finite())
+                .map(|(b, &(u, _))| (coarse.centre(b), u))
                 .collect();
             (label.to_owned(), curve)
         };
@@ -352,9 +479,10 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
                 curves.push(profile("reference", r));
             }
         }
+        let across = if on_particles { "z" } else { "y" };
         let title = format!(
-            "time-averaged U at x = {} m against y (m)",
-            options.stations[middle]
+            "time-averaged U at x = {} m against {across} (m)",
+            stations[middle]
         );
         error_figure(
             png,
@@ -362,7 +490,7 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
             &points,
             CurvePanel {
                 title: &title,
-                x_label: "y (m)",
+                x_label: if on_particles { "z (m)" } else { "y (m)" },
                 curves: &curves,
             },
         )?;
@@ -370,18 +498,19 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     Ok(rows)
 }
 
-/// Writes `profiles` as CSV rows `station, y, U, k` (bin centres in y, m).
+/// Writes `profiles` as CSV rows `station, y, U, k` (bin centres, m: in y on a grid, in z on
+/// particles, the column keeping its name).
 fn write_profiles(
     path: &Path,
     profiles: &Profiles,
     stations: &[Real],
-    bin: Real,
+    coarse: Coarse,
 ) -> Result<(), IoError> {
     let columns = ["station", "y", "U", "k"].map(String::from);
     let mut csv = CsvSeries::create(path, &columns)?;
     for (x, prof) in stations.iter().zip(profiles) {
         for (b, (u, k)) in prof.iter().enumerate() {
-            csv.row(&[*x, (b as Real + 0.5) * bin, *u, *k])?;
+            csv.row(&[*x, coarse.centre(b), *u, *k])?;
         }
     }
     Ok(())
@@ -428,13 +557,13 @@ pub fn table(rows: &[AblBenchRow]) -> String {
         .find(|r| r.label == "reference")
         .map(|r| r.seconds);
     let mut out = String::from(
-        "| run | seed | cells | steps | wall s | / reference | vortex particles | mean k | U error | k error |\n\
+        "| run | seed | cells or particles | steps | wall s | / reference | vortex particles (mean) | mean k | U error | k error |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let share = reference.map_or("-".into(), |t| format!("1/{:.0}", t / r.seconds));
         out.push_str(&format!(
-            "| {} | {} | {} | {} | {:.1} | {} | {} | {:.5} | {:.4} | {:.5} |\n",
+            "| {} | {} | {} | {} | {:.1} | {} | {} ({:.1}) | {:.5} | {:.4} | {:.5} |\n",
             r.label,
             r.seed,
             r.cells,
@@ -442,9 +571,17 @@ pub fn table(rows: &[AblBenchRow]) -> String {
             r.seconds,
             share,
             r.particles,
+            r.mean_particles,
             r.mean_k,
             r.u_error,
             r.k_error
+        ));
+    }
+    for r in rows.iter().filter(|r| r.failed.is_some()) {
+        let why = r.failed.as_deref().unwrap_or_default();
+        out.push_str(&format!(
+            "\n{} (seed {}) stopped early: {why}",
+            r.label, r.seed
         ));
     }
     for label in ["none", "random", "abl"] {

@@ -5,6 +5,7 @@
 //! grid + SPH scene costs ([`coupling`]).
 
 pub mod abl;
+pub mod abl_particles;
 pub mod coupling;
 pub mod floors;
 pub mod grid;

@@ -88,15 +88,21 @@ impl From<GridBenchArgs> for GridBenchOptions {
 /// Options of `eddy bench-abl`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct AblBenchArgs {
-    /// The backward-facing step scene (with a database for its step).
+    /// A scene with an `abl` obstacle: the backward-facing step on a grid (the default), or a
+    /// stream past obstacles on SPH particles (e.g. scenes/abl_sph_river.toml).
     #[arg(default_value = "scenes/abl_backward_step.toml")]
     pub scene: PathBuf,
-    /// Resolution factor of the plain reference run.
-    #[arg(long, default_value_t = 4)]
-    pub scale: usize,
-    /// Stations behind the step, m along x.
-    #[arg(long, value_delimiter = ',', default_value = "1.25,1.5,2.0,2.5,3.0")]
+    /// Resolution factor of the plain reference run [default: 4 on a grid, 2 on particles].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub scale: Option<u64>,
+    /// Stations behind the obstacles, m along x [default: 1.25,1.5,2,2.5,3 on a grid; two and
+    /// four obstacle lengths behind each obstacle with a database on particles].
+    #[arg(long, value_delimiter = ',')]
     pub stations: Vec<f64>,
+    /// Statistics from this time, s [default: the grid's average_from; half the run on
+    /// particles].
+    #[arg(long, value_name = "SECONDS")]
+    pub from: Option<f64>,
     /// Override a scene key in every run, e.g. --set time.end=6 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -122,8 +128,9 @@ pub struct AblBenchArgs {
 impl From<AblBenchArgs> for AblBenchOptions {
     fn from(a: AblBenchArgs) -> Self {
         AblBenchOptions {
-            scale: a.scale,
+            scale: a.scale.map(|s| s as usize),
             stations: a.stations,
+            from: a.from,
             overrides: a.set,
             skip_reference: a.skip_reference,
             reference: a.reference,

@@ -389,8 +389,12 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         .collect::<Vec<_>>()
         .into_iter()
         .chain(
-            (!options.skip_reference && options.reference.is_none())
-                .then(|| ("reference", load(std::slice::from_ref(&reference_override)).map(plain))),
+            (!options.skip_reference && options.reference.is_none()).then(|| {
+                (
+                    "reference",
+                    load(std::slice::from_ref(&reference_override)).map(plain),
+                )
+            }),
         )
         .map(|(l, r)| r.map(|sc| (l, sc)))
         .collect::<Result<_, _>>()?;

@@ -528,3 +528,72 @@ fn seeds_in_a_uniform_stream_cascade_as_the_rules_predict_at_sph_scale() {
     let died = alive(GRID_DISSIPATION, 1);
     assert!(lived > 3 * died, "{lived} steps against {died}");
 }
+
+/// The particle frames carry what a turbulence researcher looks at: the fluid's vorticity (the
+/// solver's curl, the field `metrics.csv` summarises: the frame's mean |omega| is the metrics
+/// row's at the same time) and the boundary layer's `abl_vorticity`, one vector per particle.
+#[test]
+fn particle_frames_carry_the_vorticity_and_the_layer() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let db = database(dir.path());
+    let file = dir.path().join("abl_sph_test.toml");
+    let body = text(
+        &common::abl_line(&db),
+        "[turbulence]\nc_p = 1e3\ngain = 0.1",
+    )
+    .replace("steps = 6", "steps = 12")
+    .replace(
+        "vtk = false\nmetrics = []",
+        "vtk = false\nhdf5 = true\ninterval = 0.004\nmetrics = [\"vorticity_mean\"]",
+    );
+    std::fs::write(&file, body).expect("writes the scene");
+    let out = dir.path().join("out");
+    let options = eddy::pipeline::RunOptions {
+        out: Some(out.clone()),
+        progress: false,
+        ..eddy::pipeline::RunOptions::default()
+    };
+    let _serial = common::hdf5_or_child();
+    eddy::pipeline::run(&file, &options).expect("runs");
+    let metrics = std::fs::read_to_string(out.join("metrics.csv")).expect("metrics");
+    let rows: Vec<(Real, Real)> = metrics
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<Real> = l.split(',').map(|x| x.parse().expect("a number")).collect();
+            (c[1], c[3])
+        })
+        .collect();
+    let h5 = hdf5::File::open(out.join("frames.h5")).expect("frames.h5");
+    let frames = h5.group("frames").expect("frames");
+    let mut compared = 0;
+    for name in frames.member_names().expect("names") {
+        let g = frames.group(&name).expect("frame");
+        let n = g.dataset("position").expect("position").shape()[0];
+        for field in ["vorticity", ABL_FIELD] {
+            assert_eq!(g.dataset(field).expect(field).shape(), [n, 3], "{field}");
+        }
+        let t: Real = g.attr("time").expect("time").read_scalar().expect("time");
+        let w: Vec<Real> = g
+            .dataset("vorticity")
+            .expect("vorticity")
+            .read_raw()
+            .expect("read");
+        let mean = w
+            .chunks(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]).norm())
+            .sum::<Real>()
+            / n as Real;
+        if let Some(&(_, row)) = rows.iter().find(|(rt, _)| (rt - t).abs() < 1e-12) {
+            assert!(
+                (mean - row).abs() <= 1e-12 * row.max(1.0),
+                "t = {t}: {mean} against {row}"
+            );
+            compared += usize::from(row > 0.0);
+        }
+    }
+    assert!(
+        compared >= 2,
+        "{compared} frames with a moving fluid compared"
+    );
+}

@@ -415,3 +415,131 @@ fn the_resolved_scene_records_until_and_steps() {
         assert_eq!(metrics("first"), metrics("again"));
     }
 }
+
+/// Issue 52, 1: in a scene with a grid and a fluid (no coupling) the container is the water's
+/// tank, open to the air inside. One as large as the domain (the natural set-up) was refused as
+/// an obstacle covering every cell; a smaller one made the inside of the tank solid to the air.
+#[test]
+fn a_domain_sized_container_leaves_the_air_inside_it_open() {
+    for half in [0.5, 0.45] {
+        let text = format!(
+            "name = \"tank\"\n[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[time]\nsteps = 3\n\
+             [fluid]\nspacing = 0.05\n[[fluid.blocks]]\nmin = [0.1, 0.1, 0.1]\n\
+             max = [0.5, 0.4, 0.5]\n[container]\n\
+             shape = {{ type = \"box\", half_extents = [{half}, {half}, {half}] }}\n\
+             position = [0.5, 0.5, 0.5]\n[grid]\nresolution = [16, 16, 16]\n\
+             [output]\nvtk = false\nmetrics = []\n"
+        );
+        let scene = parse_str(&text, Path::new("tank.toml"), &[]).expect("the scene");
+        let mut p = Pipeline::build(&scene).expect("a container as large as the domain runs");
+        for _ in 0..3 {
+            p.step(None, None).expect("steps");
+        }
+        let grid = common::grid(&p);
+        let (mut inside, mut solid) = (0, 0);
+        for i in 0..16 {
+            for j in 0..16 {
+                for k in 0..16 {
+                    let c = grid.mac.cell_center([i, j, k]);
+                    if (0..3).all(|a| (c[a] - 0.5).abs() < half) {
+                        inside += 1;
+                        solid += usize::from(grid.bounds.is_solid([i, j, k]));
+                    }
+                }
+            }
+        }
+        assert!(inside > 2000, "{inside} cells inside the tank");
+        assert_eq!(
+            solid, 0,
+            "half extent {half}: {solid} of {inside} cells solid"
+        );
+    }
+}
+
+/// Issue 52, 2: smoke sources that cannot work are refused with their key (one outside the
+/// domain, a density or buoyancy of 1e300), and one smaller than a cell, which emits nothing,
+/// is run with a warning that names it.
+#[test]
+fn smoke_sources_that_cannot_work_are_named() {
+    let scene = |source: &str, buoyancy: &str| {
+        format!(
+            "name = \"plume\"\n[domain]\nmin = [0, 0, 0]\nmax = [0.16, 0.16, 0.16]\n[time]\n\
+             steps = 1\n[grid]\nresolution = [16, 16, 16]\n[grid.smoke]\nbuoyancy = {buoyancy}\n\
+             [[grid.smoke.sources]]\n{source}\n[output]\nvtk = false\nmetrics = []\n"
+        )
+    };
+    let ball = |radius: &str, at: &str, density: &str| {
+        format!(
+            "shape = {{ type = \"sphere\", radius = {radius} }}\nposition = {at}\n\
+             density = {density}"
+        )
+    };
+    let inside = "[0.08, 0.08, 0.08]";
+    for (text, key) in [
+        (
+            scene(&ball("0.02", "[0.08, 0.5, 0.08]", "1.0"), "1.0"),
+            "grid.smoke.sources[0].position[1]",
+        ),
+        (
+            scene(&ball("0.02", inside, "1e300"), "1.0"),
+            "grid.smoke.sources[0].density",
+        ),
+        (
+            scene(&ball("0.02", inside, "1.0"), "1e300"),
+            "grid.smoke.buoyancy",
+        ),
+    ] {
+        let err = parse_str(&text, Path::new("plume.toml"), &[]).expect_err("refused");
+        assert!(err.to_string().contains(key), "{err} should name {key}");
+    }
+    // Radius 8e-5 m on a 1 cm grid, off the cell centres: valid, but it covers no cell.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("plume.toml");
+    std::fs::write(
+        &file,
+        scene(&ball("8e-5", "[0.08, 0.08, 0.08]", "1.0"), "1.0"),
+    )
+    .expect("writes the scene");
+    let out = Command::new(env!("CARGO_BIN_EXE_eddy"))
+        .args(["run", "--out"])
+        .arg(dir.path().join("out"))
+        .arg(&file)
+        .output()
+        .expect("eddy runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("grid.smoke.sources[0] covers no cell"),
+        "{stderr}"
+    );
+}
+
+/// Issue 52, 4: the memory estimate a run is admitted by bounds what the SPH set-up allocates,
+/// the neighbour lists and pair caches included, for every shipped SPH scene (those needing a
+/// precomputed database aside).
+#[test]
+fn the_memory_estimate_bounds_the_sph_set_up() {
+    let mut checked = 0;
+    for entry in std::fs::read_dir(shipped("")).expect("scenes") {
+        let path = entry.expect("entry").path();
+        let text = std::fs::read_to_string(&path).unwrap_or_default();
+        if path.extension().is_none_or(|e| e != "toml") || text.contains("abl =") {
+            continue;
+        }
+        let scene = eddy::scene::load(&path, &[]).expect("a shipped scene loads");
+        if scene.fluid.is_none() {
+            continue;
+        }
+        let bodies = eddy::scene::build::bodies(&scene).expect("bodies");
+        let estimate = eddy::pipeline::Footprint::of(&scene, &bodies).bytes;
+        let p = Pipeline::build(&scene).expect("builds");
+        let used = p.sim.sph.as_ref().expect("a fluid").memory_bytes() as f64;
+        assert!(
+            used <= estimate,
+            "{}: {used:.3e} B allocated, {estimate:.3e} B estimated",
+            path.display()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked} scenes");
+}

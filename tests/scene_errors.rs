@@ -543,3 +543,49 @@ fn errors_inside_probes_point_at_the_entry_and_key() {
         assert_contains(&message(parse(&probes(second))), parts);
     }
 }
+
+/// Issue 52's degenerate container: `refine_sloshing.toml` with the tank 4e-7 m tall (and a
+/// viscosity of 10 and a domain 50 m deep) passed the memory estimate, then its boundary shell,
+/// one column per 4e-7 m of the wall's offset, packed millions of samples into a few neighbour
+/// cells. Every body of an SPH scene must now be a spacing thick; the refusal names the key
+/// and comes at once, before anything is built.
+#[test]
+fn a_container_thinner_than_a_spacing_is_refused_at_once() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/refine_sloshing.toml");
+    let started = std::time::Instant::now();
+    let overrides: Vec<String> = [
+        "container.shape.half_extents=[0.25, 2e-7, 0.05]",
+        "viscosity.kinematic=10",
+        "domain.min=[-0.05, -50.0, -0.05]",
+    ]
+    .map(String::from)
+    .to_vec();
+    let err = load(&path, &overrides).expect_err("a degenerate container");
+    assert!(
+        started.elapsed().as_secs_f64() < 1.0,
+        "{:?}",
+        started.elapsed()
+    );
+    assert_contains(
+        &err.to_string(),
+        &[
+            "container.shape.half_extents[1]",
+            "2e-7",
+            "half the fluid spacing",
+        ],
+    );
+    // An obstacle too, and each shape's own key: a ball of radius 1 mm at a 2 cm spacing.
+    let text = format!(
+        "{MINIMAL}\n[[obstacles]]\nshape = {{ type = \"sphere\", radius = 0.001 }}\n\
+         position = [0.7, 0.7, 0.7]\n"
+    );
+    assert_contains(
+        &message(parse(&text)),
+        &["obstacles[0].shape.radius", "0.025"],
+    );
+    // A grid scene keeps its thin plates (the paper's whisk): no fluid spacing to hold them to.
+    let plate = "name = \"plate\"\n[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[time]\nend = 1.0\n\
+        [grid]\nresolution = [8, 8, 8]\n[[obstacles]]\n\
+        shape = { type = \"box\", half_extents = [0.2, 0.2, 0.001] }\nposition = [0.5, 0.5, 0.5]\n";
+    parse(plate).expect("a thin plate in a grid scene");
+}

@@ -65,6 +65,15 @@ impl SmokeState {
             .enumerate()
             .map(|(i, s)| SourceRegion::new(cells_on, flow, s, i))
             .collect::<Result<Vec<_>, _>>()?;
+        for (i, src) in sources.iter().enumerate() {
+            if src.moving.is_none() && !src.cells.iter().any(|&c| c) {
+                tracing::warn!(
+                    "grid.smoke.sources[{i}] covers no cell of the {:.3e} m grid and emits \
+                     nothing: make it at least a cell across or place it on cell centres",
+                    cells_on.dx
+                );
+            }
+        }
         Ok(Self {
             density: Array3::zeros(cells_on.dims),
             temperature: smoke

@@ -99,7 +99,7 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
         smoke: grid.smoke.clone(),
         smoke_refinement: abl_settings(scene).map_or(1, |s| s.params.upsample),
         average_from: grid.average_from,
-        container: scene.coupling.is_some() && scene.container.is_some(),
+        container: scene.fluid.is_some() && scene.container.is_some(),
     })
 }
 

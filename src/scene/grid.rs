@@ -16,6 +16,12 @@ const MAX_CELLS: usize = 512 * 512 * 512;
 /// Relative mismatch allowed between the cell sizes along the three axes.
 const CUBIC_TOLERANCE: Real = 1e-6;
 
+/// Largest |buoyancy| of the smoke, m/s^2 per unit of smoke (a hundred g).
+const MAX_BUOYANCY: Real = 981.0;
+
+/// Largest density a smoke source sets, units of smoke (the shipped scenes use 1).
+const MAX_SOURCE_DENSITY: Real = 1e3;
+
 /// A MAC grid covering the scene's domain with cubic cells.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -305,12 +311,10 @@ impl Scene {
             c.num("grid.steady_tolerance", tol, Interval::gt(0.0))?;
         }
         if let Some(smoke) = &grid.smoke {
-            c.num("grid.smoke.buoyancy", smoke.buoyancy, Interval::any())?;
-            c.num(
-                "grid.smoke.heat_buoyancy",
-                smoke.heat_buoyancy,
-                Interval::any(),
-            )?;
+            // Beyond a hundred g per unit of smoke a plume leaves the grid in one step.
+            let accel = || Interval::closed(-MAX_BUOYANCY, MAX_BUOYANCY).note("m/s^2 per unit");
+            c.num("grid.smoke.buoyancy", smoke.buoyancy, accel())?;
+            c.num("grid.smoke.heat_buoyancy", smoke.heat_buoyancy, accel())?;
             for (i, source) in smoke.sources.iter().enumerate() {
                 let key = format!("grid.smoke.sources[{i}]");
                 if matches!(source.shape, Shape::Mesh { .. }) {
@@ -322,8 +326,20 @@ impl Scene {
                 }
                 c.shape(&format!("{key}.shape"), &source.shape)?;
                 c.vec3(&format!("{key}.position"), source.position)?;
+                // A source outside the domain emits nothing.
+                if source.motion.keyframes.is_empty() {
+                    self.point_inside(c, &format!("{key}.position"), &source.position)?;
+                }
+                for (k, frame) in source.motion.keyframes.iter().enumerate() {
+                    let at = format!("{key}.motion.keyframes[{k}].position");
+                    self.point_inside(c, &at, &frame.position)?;
+                }
                 c.vec3(&format!("{key}.rotation"), source.rotation)?;
-                c.num(&format!("{key}.density"), source.density, Interval::ge(0.0))?;
+                c.num(
+                    &format!("{key}.density"),
+                    source.density,
+                    Interval::closed(0.0, MAX_SOURCE_DENSITY).note("units of smoke"),
+                )?;
                 c.num(
                     &format!("{key}.temperature"),
                     source.temperature,

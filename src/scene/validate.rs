@@ -318,6 +318,31 @@ impl Scene {
     }
 }
 
+/// The half sizes of an analytic shape under their keys (`half_extents[0]`, `radius`,
+/// `half_height`, ...); none for a mesh.
+fn half_sizes(shape: &Shape) -> Vec<(String, Real)> {
+    match shape {
+        Shape::Box { half_extents } => half_extents
+            .iter()
+            .enumerate()
+            .map(|(axis, &h)| (format!("half_extents[{axis}]"), h))
+            .collect(),
+        Shape::Sphere { radius } => vec![("radius".into(), *radius)],
+        Shape::Cylinder {
+            radius,
+            half_height,
+        }
+        | Shape::Capsule {
+            radius,
+            half_height,
+        } => vec![
+            ("radius".into(), *radius),
+            ("half_height".into(), *half_height),
+        ],
+        Shape::Mesh { .. } => Vec::new(),
+    }
+}
+
 /// Builds the errors of one file, so each rule is one line.
 pub(super) struct Checker<'a> {
     pub(super) file: &'a Path,
@@ -400,44 +425,26 @@ impl Checker<'_> {
     }
 
     pub(super) fn shape(&self, key: &str, shape: &Shape) -> Result<(), SceneError> {
-        let positive =
-            |name: &str, v: Real| self.num(&format!("{key}.{name}"), v, Interval::gt(0.0));
-        match shape {
-            Shape::Box { half_extents } => {
-                for (axis, &h) in half_extents.iter().enumerate() {
-                    positive(&format!("half_extents[{axis}]"), h)?;
-                }
+        for (name, v) in half_sizes(shape) {
+            self.num(&format!("{key}.{name}"), v, Interval::gt(0.0))?;
+        }
+        if let Shape::Mesh { path, scale } = shape {
+            self.num(&format!("{key}.scale"), *scale, Interval::gt(0.0))?;
+            // `load` made the path absolute; resolve again for scenes built in code.
+            let resolved = base_dir(self.file).join(path);
+            if resolved.is_dir() {
+                return Err(self.invalid(
+                    format!("{key}.path"),
+                    resolved.display(),
+                    "an OBJ or STL file (this is a folder)",
+                ));
             }
-            Shape::Sphere { radius } => positive("radius", *radius)?,
-            Shape::Cylinder {
-                radius,
-                half_height,
-            }
-            | Shape::Capsule {
-                radius,
-                half_height,
-            } => {
-                positive("radius", *radius)?;
-                positive("half_height", *half_height)?;
-            }
-            Shape::Mesh { path, scale } => {
-                positive("scale", *scale)?;
-                // `load` made the path absolute; resolve again for scenes built in code.
-                let resolved = base_dir(self.file).join(path);
-                if resolved.is_dir() {
-                    return Err(self.invalid(
-                        format!("{key}.path"),
-                        resolved.display(),
-                        "an OBJ or STL file (this is a folder)",
-                    ));
-                }
-                if !resolved.is_file() {
-                    return Err(SceneError::MissingMesh {
-                        file: self.file.to_owned(),
-                        key: format!("{key}.path"),
-                        path: resolved,
-                    });
-                }
+            if !resolved.is_file() {
+                return Err(SceneError::MissingMesh {
+                    file: self.file.to_owned(),
+                    key: format!("{key}.path"),
+                    path: resolved,
+                });
             }
         }
         Ok(())
@@ -445,39 +452,27 @@ impl Checker<'_> {
 
     /// A body of an SPH scene must be at least one particle `spacing` thick along every axis:
     /// the walls sample its surface at the spacing, so a thinner one has no inside, lets the
-    /// fluid through, and a sheet of a few nanometres packed every sample of a face into one
-    /// neighbour cell (a `refine_sloshing.toml` container 4e-7 m tall spent minutes and gigabytes
-    /// in the neighbour search). Meshes are checked when they are loaded.
+    /// fluid through, and a box a few nanometres thick grew a boundary shell of one column per
+    /// few nanometres of its offset (a `refine_sloshing.toml` container 4e-7 m tall spent
+    /// minutes and gigabytes in the neighbour search). A capsule's caps make it a diameter long
+    /// whatever its half height. Meshes are not held to it: their samples follow their area.
     pub(super) fn thick_enough(
         &self,
         key: &str,
         shape: &Shape,
         spacing: Real,
     ) -> Result<(), SceneError> {
-        let half = |name: &str, v: Real| {
+        let capsule = matches!(shape, Shape::Capsule { .. });
+        for (name, v) in half_sizes(shape) {
+            if capsule && name == "half_height" {
+                continue;
+            }
             self.num(
                 &format!("{key}.{name}"),
                 v,
                 Interval::ge(0.5 * spacing)
                     .note("half the fluid spacing: a body thinner than a spacing has no inside"),
-            )
-        };
-        match shape {
-            Shape::Box { half_extents } => {
-                for (axis, &h) in half_extents.iter().enumerate() {
-                    half(&format!("half_extents[{axis}]"), h)?;
-                }
-            }
-            Shape::Sphere { radius } => half("radius", *radius)?,
-            Shape::Cylinder {
-                radius,
-                half_height,
-            } => {
-                half("radius", *radius)?;
-                half("half_height", *half_height)?;
-            }
-            Shape::Capsule { radius, .. } => half("radius", *radius)?,
-            Shape::Mesh { .. } => {}
+            )?;
         }
         Ok(())
     }

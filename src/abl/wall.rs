@@ -60,19 +60,20 @@ impl WallLayer {
         best.1
     }
 
-    /// omega_pre at every boundary point in the world frame, times `gain`, for the object at
-    /// `pose` moving with `linear` (m/s) relative to the surrounding flow and spinning with
-    /// `angular` (rad/s), both in the world frame (section 5.1, "Applying the precomputed set").
+    /// omega_pre at every boundary point in the world frame, times `scale` (the run time's gain
+    /// over the layer's thickness, 1/m), for the object at `pose` moving with `linear` (m/s)
+    /// relative to the surrounding flow and spinning with `angular` (rad/s), both in the world
+    /// frame (section 5.1, "Applying the precomputed set").
     pub fn values(
         &self,
         pose: &Isometry3<Real>,
         linear: &Vec3,
         angular: &Vec3,
-        gain: Real,
+        scale: Real,
     ) -> Vec<Vec3> {
         let mut values = self.db.lookup_world(pose, linear, angular);
-        if gain != 1.0 {
-            values.iter_mut().for_each(|w| *w *= gain);
+        if scale != 1.0 {
+            values.iter_mut().for_each(|w| *w *= scale);
         }
         values
     }

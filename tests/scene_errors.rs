@@ -589,3 +589,18 @@ fn a_container_thinner_than_a_spacing_is_refused_at_once() {
         shape = { type = \"box\", half_extents = [0.2, 0.2, 0.001] }\nposition = [0.5, 0.5, 0.5]\n";
     parse(plate).expect("a thin plate in a grid scene");
 }
+
+/// `output.compression` is a deflate level: 0 to 9.
+#[test]
+fn compression_is_a_deflate_level() {
+    assert_eq!(parse(MINIMAL).expect("minimal").output.compression, 4);
+    let msg = message(parse_with(MINIMAL, &["output.compression=10"]));
+    assert_contains(&msg, &["output.compression", "10", "deflate level"]);
+    assert_eq!(
+        parse_with(MINIMAL, &["output.compression=0"])
+            .expect("uncompressed")
+            .output
+            .compression,
+        0
+    );
+}

@@ -21,7 +21,9 @@ use std::path::Path;
 
 use hdf5::Group;
 
-use super::hdf5_frames::{ctx, validate_sets, write_scalar_attr, write_sets, Failure, FrameIndex};
+use super::hdf5_frames::{
+    ctx, validate_sets, write_dataset, write_scalar_attr, write_sets, Failure, FrameIndex,
+};
 use super::{AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
 use crate::{Real, Vec3};
 
@@ -87,6 +89,13 @@ impl Hdf5GridFrames {
         })
     }
 
+    /// Writes the frames' datasets deflated at `level` (0 to 9; 0: uncompressed, the default),
+    /// as [`super::Hdf5Frames::compressed`].
+    pub fn compressed(mut self, level: u8) -> Self {
+        self.index.compression = level.min(9);
+        self
+    }
+
     /// Appends one frame as `/frames/NNNNNN`; the index advances only when the frame is
     /// complete, so a failed append can be retried.
     pub fn append(&mut self, frame: &GridFrame) -> Result<(), IoError> {
@@ -121,13 +130,14 @@ impl Hdf5GridFrames {
                 ));
             }
         }
+        let level = self.index.compression;
         self.index.append(
             frame.step,
             frame.time,
             |root| write_geometry(root, &geometry),
             |group| {
-                write_fields(group, frame)?;
-                write_sets(group, sets)
+                write_fields(group, frame, level)?;
+                write_sets(group, sets, level)
             },
         )?;
         self.geometry = Some(geometry);
@@ -163,20 +173,16 @@ fn write_array_attr<T: hdf5::H5Type>(loc: &Group, name: &str, v: &[T]) -> Result
     ctx(attr.write_raw(v), what)
 }
 
-fn write_fields(group: &Group, frame: &GridFrame) -> Result<(), Failure> {
+fn write_fields(group: &Group, frame: &GridFrame, level: u8) -> Result<(), Failure> {
     let [nx, ny, nz] = frame.dims;
     for field in &frame.fields {
-        let what = || format!("writing dataset {:?}", field.name);
         // The identity order is the view's own [i, j, k] C order, which is h5py's.
         let values = field.data.flatten(|v| v);
-        let builder = group.new_dataset::<Real>();
-        let ds = match field.data {
-            GridFieldData::Scalar(_) => ctx(builder.shape((nx, ny, nz)).create(field.name), what)?,
-            GridFieldData::Vector(_) => {
-                ctx(builder.shape((nx, ny, nz, 3)).create(field.name), what)?
-            }
+        let shape: &[usize] = match field.data {
+            GridFieldData::Scalar(_) => &[nx, ny, nz],
+            GridFieldData::Vector(_) => &[nx, ny, nz, 3],
         };
-        ctx(ds.as_writer().write_raw(&values), what)?;
+        write_dataset(group, field.name, &values, shape, level)?;
     }
     Ok(())
 }

@@ -44,6 +44,8 @@ pub struct Frames {
     pub interval: Real,
     pub vtk: bool,
     pub hdf5: bool,
+    /// Deflate level of the HDF5 datasets (`output.compression`).
+    pub compression: u8,
     attrs: Vec<(&'static str, AttrValue)>,
     both: bool,
     pub particles: Option<ParticleFrames>,
@@ -365,6 +367,7 @@ impl Pipeline {
             interval: out.interval,
             vtk: out.vtk,
             hdf5: out.hdf5,
+            compression: out.compression,
             attrs: vec![
                 ("scene", AttrValue::Str(scene.name.clone())),
                 ("seed", AttrValue::Int(scene.seed as i64)),
@@ -429,7 +432,7 @@ impl Pipeline {
             f.particles = Some(ParticleFrames::new(
                 out,
                 f.vtk,
-                name.as_deref(),
+                name.as_deref().map(|n| (n, f.compression)),
                 &f.attrs,
                 sph,
             )?);
@@ -439,7 +442,7 @@ impl Pipeline {
             f.grid = Some(GridFrames::new(
                 out,
                 f.vtk,
-                name.as_deref(),
+                name.as_deref().map(|n| (n, f.compression)),
                 &f.attrs,
                 grid,
             )?);

@@ -82,23 +82,24 @@ impl<H> Writers<H> {
 pub struct ParticleFrames(Writers<Hdf5Frames>);
 
 impl ParticleFrames {
-    /// Writers into `out`; `hdf5` names the HDF5 file when the scene asked for one.
+    /// Writers into `out`; `hdf5` names the HDF5 file and its deflate level when the scene
+    /// asked for one.
     pub fn new(
         out: &Path,
         vtk: bool,
-        hdf5: Option<&str>,
+        hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
         solver: &SphSolver,
     ) -> Result<Self, IoError> {
         let hdf5 = hdf5
-            .map(|name| {
+            .map(|(name, level)| {
                 let mut all = attrs.to_vec();
                 all.extend([
                     ("particle_spacing", AttrValue::Real(solver.spacing)),
                     ("particle_mass", AttrValue::Real(solver.fluid.mass)),
                     ("rest_density", AttrValue::Real(solver.fluid.rest_density)),
                 ]);
-                Hdf5Frames::create(&out.join(name), &all)
+                Ok(Hdf5Frames::create(&out.join(name), &all)?.compressed(level))
             })
             .transpose()?;
         Ok(Self(Writers::new(out, vtk, "particles", hdf5)))
@@ -166,16 +167,19 @@ pub struct GridFrames {
 }
 
 impl Writers<Hdf5GridFrames> {
-    /// The `series.pvd` (with `vtk`) and the HDF5 file `hdf5` of one grid in `out`.
+    /// The `series.pvd` (with `vtk`) and the HDF5 file `hdf5` (name, deflate level) of one
+    /// grid in `out`.
     fn grid(
         out: &Path,
         vtk: bool,
         series: &str,
-        hdf5: Option<&str>,
+        hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
     ) -> Result<Self, IoError> {
         let hdf5 = hdf5
-            .map(|name| Hdf5GridFrames::create(&out.join(name), attrs))
+            .map(|(name, level)| {
+                Ok::<_, IoError>(Hdf5GridFrames::create(&out.join(name), attrs)?.compressed(level))
+            })
             .transpose()?;
         Ok(Self::new(out, vtk, series, hdf5))
     }
@@ -185,12 +189,12 @@ impl Writers<Hdf5GridFrames> {
 const FINE_SMOKE: &str = "smoke_fine";
 
 impl GridFrames {
-    /// Writers into `out` for `solver`'s frames; `hdf5` names the HDF5 file when the scene
-    /// asked for one.
+    /// Writers into `out` for `solver`'s frames; `hdf5` names the HDF5 file and its deflate
+    /// level when the scene asked for one.
     pub fn new(
         out: &Path,
         vtk: bool,
-        hdf5: Option<&str>,
+        hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
         solver: &GridSolver,
     ) -> Result<Self, IoError> {
@@ -199,7 +203,10 @@ impl GridFrames {
         Ok(Self {
             flow: Writers::grid(out, vtk, "grid", hdf5, attrs)?,
             fine_smoke: fine
-                .then(|| Writers::grid(out, vtk, FINE_SMOKE, hdf5.map(|_| fine_h5.as_str()), attrs))
+                .then(|| {
+                    let fine = hdf5.map(|(_, level)| (fine_h5.as_str(), level));
+                    Writers::grid(out, vtk, FINE_SMOKE, fine, attrs)
+                })
                 .transpose()?,
         })
     }

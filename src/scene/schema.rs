@@ -157,6 +157,11 @@ pub struct Output {
     /// Write the frames into one `frames.h5` as well.
     #[serde(default)]
     pub hdf5: bool,
+    /// Deflate level of the HDF5 frames' datasets, 0 to 9 (0: uncompressed); each dataset is
+    /// chunked whole and byte-shuffled first, HDF5's built-in filters that h5py and ParaView
+    /// read as they are.
+    #[serde(default = "default_compression")]
+    pub compression: u8,
     /// Columns of `metrics.csv` beyond step, time and dt; every metric when left out, none with [].
     #[serde(default = "default_metrics")]
     pub metrics: Vec<Metric>,
@@ -164,6 +169,9 @@ pub struct Output {
 
 fn default_true() -> bool {
     true
+}
+fn default_compression() -> u8 {
+    4
 }
 fn default_interval() -> Real {
     1.0 / 30.0
@@ -179,6 +187,7 @@ impl Default for Output {
             interval: default_interval(),
             vtk: true,
             hdf5: false,
+            compression: default_compression(),
             metrics: default_metrics(),
         }
     }

@@ -111,6 +111,11 @@ impl Scene {
             .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;
         self.validate_probes(&c)?;
         c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
+        c.num(
+            "output.compression",
+            Real::from(self.output.compression),
+            Interval::closed(0.0, 9.0).note("a deflate level, 0 for none"),
+        )?;
         let mut metrics = HashSet::new();
         for (i, metric) in self.output.metrics.iter().enumerate() {
             if !metrics.insert(metric) {

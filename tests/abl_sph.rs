@@ -74,6 +74,19 @@ fn built(text: &str) -> Pipeline {
     common::built(text, "abl_sph_test.toml")
 }
 
+/// Eager seeding with kernels weak enough to keep the short runs stable.
+const EAGER: &str = "[turbulence]\nc_p = 1e3\ngain = 0.1";
+
+/// Writes the scene with the ball's database and [`EAGER`] seeding, edited by `edit`, into
+/// `dir` (which also holds the database); returns its path.
+fn eager_file(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
+    let db = database(dir);
+    let file = dir.join("abl_sph_test.toml");
+    let body = edit(text(&common::abl_line(&db), EAGER));
+    std::fs::write(&file, body).expect("writes the scene");
+    file
+}
+
 fn sph(p: &Pipeline) -> &SphSolver {
     p.sim.sph.as_ref().expect("an SPH scene")
 }
@@ -416,10 +429,7 @@ fn a_database_for_another_obstacle_is_refused() {
 fn the_vortex_budget_balances_every_step() {
     let dir = tempfile::tempdir().expect("temp dir");
     let db = database(dir.path());
-    let mut p = built(&text(
-        &common::abl_line(&db),
-        "[turbulence]\nc_p = 1e3\ngain = 0.1",
-    ));
+    let mut p = built(&text(&common::abl_line(&db), EAGER));
     let mut count = 0;
     let mut totals = [0usize; 6];
     for _ in 0..40 {
@@ -535,18 +545,12 @@ fn seeds_in_a_uniform_stream_cascade_as_the_rules_predict_at_sph_scale() {
 #[test]
 fn particle_frames_carry_the_vorticity_and_the_layer() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let db = database(dir.path());
-    let file = dir.path().join("abl_sph_test.toml");
-    let body = text(
-        &common::abl_line(&db),
-        "[turbulence]\nc_p = 1e3\ngain = 0.1",
-    )
-    .replace("steps = 6", "steps = 12")
-    .replace(
-        "vtk = false\nmetrics = []",
-        "vtk = false\nhdf5 = true\ninterval = 0.004\nmetrics = [\"vorticity_mean\"]",
-    );
-    std::fs::write(&file, body).expect("writes the scene");
+    let file = eager_file(dir.path(), |body| {
+        body.replace("steps = 6", "steps = 12").replace(
+            "vtk = false\nmetrics = []",
+            "vtk = false\nhdf5 = true\ninterval = 0.004\nmetrics = [\"vorticity_mean\"]",
+        )
+    });
     let out = dir.path().join("out");
     let options = eddy::pipeline::RunOptions {
         out: Some(out.clone()),
@@ -606,14 +610,7 @@ fn particle_frames_carry_the_vorticity_and_the_layer() {
 fn the_protocol_runs_on_particles() {
     use eddy::bench::abl::{run, AblBenchOptions};
     let dir = tempfile::tempdir().expect("temp dir");
-    let db = database(dir.path());
-    let file = dir.path().join("abl_sph_test.toml");
-    let body = text(
-        &common::abl_line(&db),
-        "[turbulence]\nc_p = 1e3\ngain = 0.1",
-    )
-    .replace("steps = 6", "end = 0.04");
-    std::fs::write(&file, body).expect("writes the scene");
+    let file = eager_file(dir.path(), |body| body.replace("steps = 6", "end = 0.04"));
     let options = AblBenchOptions {
         scale: None,
         stations: Vec::new(),

@@ -339,7 +339,8 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         (None, Some(fluid)) => {
             let s = options.scale.unwrap_or(2);
             let bins = Bins::across(&base).expect("a fluid");
-            let stations = default_stations(&base, &Pipeline::build(&base)?);
+            let bodies = scene::build::bodies(&base).map_err(RunError::from)?;
+            let stations = default_stations(&base, &bodies);
             (
                 Coarse::Particles(bins),
                 format!("fluid.spacing={}", fluid.spacing / s as Real),

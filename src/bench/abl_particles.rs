@@ -10,6 +10,7 @@
 //! fluctuation, as on the grid.
 
 use super::abl::Profiles;
+use crate::geometry::RigidBody;
 use crate::pipeline::Pipeline;
 use crate::scene::build::abl_settings;
 use crate::scene::Scene;
@@ -110,16 +111,16 @@ impl ParticleStations {
 }
 
 /// Stations two and four obstacle lengths (along x) behind each obstacle with a database,
-/// sorted, in m along x.
-pub fn default_stations(scene: &Scene, p: &Pipeline) -> Vec<Real> {
-    let (Some(settings), Some(sph)) = (abl_settings(scene), p.sim.sph.as_ref()) else {
+/// sorted, in m along x; `bodies` as [`crate::scene::build::bodies`] builds them.
+pub fn default_stations(scene: &Scene, bodies: &[RigidBody]) -> Vec<Real> {
+    let Some(settings) = abl_settings(scene) else {
         return Vec::new();
     };
     let mut stations: Vec<Real> = settings
         .databases
         .iter()
         .flat_map(|(body, _)| {
-            let b = &sph.bodies[*body];
+            let b = &bodies[*body];
             let (lo, hi) = b.local_aabb();
             let centre = b.pose(0.0).translation.vector.x;
             let length = hi.x - lo.x;

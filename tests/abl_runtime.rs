@@ -382,13 +382,11 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
         let listed = listed.expect("frames.h5 lists its frames");
         let mut seeded = 0;
         for (k, name) in listed.iter().enumerate() {
-            let vtp =
-                std::fs::read_to_string(out.join(format!("vortices_{k:06}.vtp"))).expect("vtp");
-            let points = vtp
-                .split("NumberOfPoints=\"")
-                .nth(1)
-                .and_then(|r| r.split('"').next());
-            let n: usize = points.and_then(|n| n.parse().ok()).expect("NumberOfPoints");
+            let vtp = common::vtk_read::read_vtk(&out.join(format!("vortices_{k:06}.vtp")));
+            let n: usize = vtp
+                .attr("Piece", "NumberOfPoints")
+                .parse()
+                .expect("a count");
             let set = h5
                 .group(&format!("frames/{name}/vortices"))
                 .expect("vortices group");
@@ -401,8 +399,11 @@ fn the_plan_is_what_runs_and_the_outputs_are_written() {
         }
         assert!(listed.len() > 2 && seeded > 0, "{} frames", listed.len());
     }
-    let vti = std::fs::read_to_string(out.join("grid_000001.vti")).expect("frame");
-    assert!(vti.contains("abl_vorticity"));
+    let vti = common::vtk_read::read_vtk(&out.join("grid_000001.vti"));
+    assert!(vti
+        .section("CellData")
+        .iter()
+        .any(|a| a.name == "abl_vorticity"));
     let metrics = std::fs::read_to_string(out.join("metrics.csv")).expect("metrics");
     let header = metrics.lines().next().expect("metrics.csv has a header");
     for column in [

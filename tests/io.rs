@@ -8,10 +8,11 @@ use std::path::Path;
 
 use eddy::io::{
     write_atomic, write_particles_vtk, AttrValue, CsvSeries, Field, Hdf5Frames, IoError,
-    ParticleFrame, PvdSeries,
+    ParticleFrame, Precision, PvdSeries, VtkOptions,
 };
 use eddy::{Real, Vec3};
-use vtkio::model::{Attribute, DataSet, IOBuffer, Piece, Vtk};
+
+use common::vtk_read::read_vtk;
 
 /// Values whose decimal forms are awkward: they catch writers that lose digits.
 const AWKWARD: [Real; 8] = [
@@ -109,96 +110,138 @@ fn write_atomic_into_missing_directory_is_an_error() {
 
 // ---------------------------------------------------------------- VTK
 
-/// The single inline PolyData piece of a file read back by vtkio.
-fn read_vtp(path: &Path) -> vtkio::model::PolyDataPiece {
-    let vtk = Vtk::import(path).unwrap();
-    let DataSet::PolyData { mut pieces, .. } = vtk.data else {
-        panic!("not PolyData: {:?}", vtk.data)
-    };
-    assert_eq!(pieces.len(), 1);
-    match pieces.remove(0) {
-        Piece::Inline(p) => *p,
-        other => panic!("piece not inline: {other:?}"),
-    }
+const EXACT: VtkOptions = VtkOptions {
+    precision: Precision::F64,
+    compression: 4,
+};
+
+/// The particle frame of the round trips: awkward values, a vector with a -0.0 and a name
+/// that needs XML escaping.
+struct Particles {
+    pos: Vec<Vec3>,
+    density: Vec<Real>,
+    velocity: Vec<Vec3>,
+    pressure: Vec<Real>,
 }
 
-fn f64s(buf: &IOBuffer) -> Vec<Real> {
-    match buf {
-        IOBuffer::F64(v) => v.clone(),
-        other => panic!("expected f64 data, got {:?}", other.scalar_type()),
+impl Particles {
+    fn new(n: usize) -> Self {
+        Particles {
+            pos: positions(n, 0.25),
+            density: (0..n)
+                .map(|i| AWKWARD[i % AWKWARD.len()] + i as Real)
+                .collect(),
+            velocity: (0..n)
+                .map(|i| Vec3::new(AWKWARD[i % 8], -(i as Real) / 7.0, 1e-12 * i as Real))
+                .collect(),
+            pressure: (0..n).map(|i| -(i as Real).sqrt()).collect(),
+        }
+    }
+
+    fn frame(&self) -> ParticleFrame<'_> {
+        ParticleFrame {
+            step: 3,
+            time: 0.03,
+            positions: &self.pos,
+            fields: vec![
+                Field::scalar("density", &self.density),
+                Field::vector("velocity", &self.velocity),
+                Field::scalar("p \"gauge\" & <rel>", &self.pressure),
+            ],
+        }
     }
 }
 
 #[test]
 fn vtk_roundtrip_points_fields_and_names() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("frame_000003.vtp");
-    let n = 50;
-    let pos = positions(n, 0.25);
-    let density: Vec<Real> = (0..n)
-        .map(|i| AWKWARD[i % AWKWARD.len()] + i as Real)
-        .collect();
-    let velocity: Vec<Vec3> = (0..n)
-        .map(|i| Vec3::new(AWKWARD[i % 8], -(i as Real) / 7.0, 1e-12 * i as Real))
-        .collect();
-    let pressure: Vec<Real> = (0..n).map(|i| -(i as Real).sqrt()).collect();
-    let frame = ParticleFrame {
-        step: 3,
-        time: 0.03,
-        positions: &pos,
-        fields: vec![
-            Field::scalar("density", &density),
-            Field::vector("velocity", &velocity),
-            Field::scalar("p \"gauge\" & <rel>", &pressure),
-        ],
-    };
-    write_particles_vtk(&path, &frame).unwrap();
-    no_temp_files(dir.path());
+    // 40,000 particles: the points and the velocity span several compressed blocks.
+    for (n, level) in [(50, 0), (50, 4), (40_000, 1), (40_000, 9)] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("frame_000003.vtp");
+        let p = Particles::new(n);
+        let options = VtkOptions {
+            compression: level,
+            ..EXACT
+        };
+        write_particles_vtk(&path, &p.frame(), options).unwrap();
+        no_temp_files(dir.path());
 
-    let piece = read_vtp(&path);
-    assert_eq!(f64s(&piece.points), flat(&pos));
+        let file = read_vtk(&path);
+        assert_eq!(file.attr("VTKFile", "type"), "PolyData");
+        assert_eq!(file.attr("Piece", "NumberOfPoints"), n.to_string());
+        assert_eq!(file.attr("Piece", "NumberOfVerts"), n.to_string());
+        assert_eq!(file.section("FieldData")[0].values, [0.03]);
+        let points = file.section("Points");
+        assert_eq!(
+            (points[0].kind.as_str(), points[0].components),
+            ("Float64", 3)
+        );
+        assert_eq!(points[0].values, flat(&p.pos));
+        let verts = file.section("Verts");
+        let ids = |from: usize| (from..n + from).map(|i| i as Real).collect::<Vec<_>>();
+        assert_eq!(
+            (verts[0].name.as_str(), &verts[0].values),
+            ("connectivity", &ids(0))
+        );
+        assert_eq!(
+            (verts[1].name.as_str(), &verts[1].values),
+            ("offsets", &ids(1))
+        );
 
-    let (conn, offs) = piece.verts.expect("vertex cells").into_xml();
-    assert_eq!(conn, (0..n as u64).collect::<Vec<_>>());
-    assert_eq!(offs, (1..=n as u64).collect::<Vec<_>>());
-
-    let arrays: Vec<_> = piece
-        .data
-        .point
-        .iter()
-        .map(|a| match a {
-            Attribute::DataArray(d) => (d.name.clone(), d.num_comp(), f64s(&d.data)),
-            other => panic!("unexpected attribute {other:?}"),
-        })
-        .collect();
-    assert_eq!(arrays.len(), 3);
-    assert_eq!(arrays[0], ("density".to_string(), 1, density.clone()));
-    assert_eq!(arrays[1], ("velocity".to_string(), 3, flat(&velocity)));
-    assert_eq!(
-        arrays[2],
-        ("p \"gauge\" & <rel>".to_string(), 1, pressure.clone())
-    );
-    // -0.0 == 0.0 above; check the sign bit survived too.
-    assert!(arrays[1].2[7 * 3].is_sign_negative());
+        let arrays: Vec<_> = file
+            .section("PointData")
+            .into_iter()
+            .map(|a| (a.name.as_str(), a.components, &a.values))
+            .collect();
+        assert_eq!(arrays.len(), 3);
+        assert_eq!(arrays[0], ("density", 1, &p.density));
+        assert_eq!(arrays[1], ("velocity", 3, &flat(&p.velocity)));
+        assert_eq!(arrays[2], ("p \"gauge\" & <rel>", 1, &p.pressure));
+        // -0.0 == 0.0 above; check the sign bit survived too.
+        assert!(arrays[1].2[7 * 3].is_sign_negative());
+        assert_eq!(file.attr("PointData", "Vectors"), "velocity");
+    }
 }
 
 #[test]
-fn vtk_file_is_xml_polydata_with_inline_binary() {
+fn vtk_f32_frames_round_to_the_nearest_float_and_compress() {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("f.vtp");
-    let pos = positions(4, 0.0);
-    let frame = ParticleFrame {
-        step: 0,
-        time: 0.0,
-        positions: &pos,
-        fields: vec![],
+    let p = Particles::new(40_000);
+    let size = |name: &str, options: VtkOptions| {
+        let path = dir.path().join(name);
+        write_particles_vtk(&path, &p.frame(), options).unwrap();
+        (read_vtk(&path), fs::metadata(&path).unwrap().len())
     };
-    write_particles_vtk(&path, &frame).unwrap();
-    let text = fs::read_to_string(&path).unwrap();
-    assert!(text.starts_with("<VTKFile type=\"PolyData\""), "{text}");
-    assert!(text.contains("header_type=\"UInt64\""), "{text}");
-    assert!(text.contains("NumberOfVerts=\"4\""), "{text}");
-    assert!(text.contains("format=\"binary\""), "{text}");
+    let (exact, exact_bytes) = size("exact.vtp", EXACT);
+    let (plain, plain_bytes) = size(
+        "plain.vtp",
+        VtkOptions {
+            compression: 0,
+            ..EXACT
+        },
+    );
+    let (small, small_bytes) = size("small.vtp", VtkOptions::default());
+    assert_eq!(plain.arrays.len(), exact.arrays.len());
+    for (a, b) in small.arrays.iter().zip(&exact.arrays) {
+        let want: Vec<Real> = match a.kind.as_str() {
+            "Float32" => b.values.iter().map(|&v| v as f32 as Real).collect(),
+            "Int64" | "Float64" => b.values.clone(),
+            other => panic!("{other}"),
+        };
+        assert_eq!(a.values, want, "{}", a.name);
+    }
+    assert_eq!(small.section("PointData")[0].kind, "Float32");
+    // f64 raw: 8 bytes a value, 8 values and 2 ids a particle.
+    let raw = 8 * 10 * 40_000;
+    assert!(
+        plain_bytes > raw && plain_bytes < raw + 4096,
+        "{plain_bytes}"
+    );
+    assert!(exact_bytes < plain_bytes, "{exact_bytes} vs {plain_bytes}");
+    // f32 raw: 4 bytes a real, 8 bytes an id.
+    let raw_f32 = (4 * 8 + 8 * 2) * 40_000;
+    assert!(small_bytes < exact_bytes, "{small_bytes} vs {exact_bytes}");
+    assert!(small_bytes < raw_f32, "{small_bytes} vs {raw_f32}");
 }
 
 #[test]
@@ -211,16 +254,16 @@ fn vtk_empty_frame_roundtrips() {
         positions: &[],
         fields: vec![Field::scalar("density", &[])],
     };
-    write_particles_vtk(&path, &frame).unwrap();
+    write_particles_vtk(&path, &frame, VtkOptions::default()).unwrap();
     // VTK's reader needs the zero counts spelled out.
-    let text = fs::read_to_string(&path).unwrap();
-    assert!(
-        text.contains("<Piece NumberOfPoints=\"0\" NumberOfVerts=\"0\">"),
-        "{text}"
+    let file = read_vtk(&path);
+    assert_eq!(file.attr("Piece", "NumberOfPoints"), "0");
+    assert_eq!(file.attr("Piece", "NumberOfVerts"), "0");
+    let density = file.section("PointData");
+    assert_eq!(
+        (density[0].name.as_str(), density[0].values.len()),
+        ("density", 0)
     );
-    let piece = read_vtp(&path);
-    assert_eq!(piece.num_points(), 0);
-    assert_eq!(piece.data.point.len(), 1);
 }
 
 #[test]
@@ -260,7 +303,7 @@ fn vtk_rejects_bad_frames_without_writing() {
     ];
     for (name, frame) in cases {
         let path = dir.path().join(name);
-        let err = write_particles_vtk(&path, &frame).unwrap_err();
+        let err = write_particles_vtk(&path, &frame, VtkOptions::default()).unwrap_err();
         assert!(matches!(err, IoError::Invalid { .. }), "{name}: {err:?}");
         assert!(err.to_string().contains(name), "{err}");
         assert!(!path.exists());

@@ -7,12 +7,19 @@ use std::fs;
 use std::path::Path;
 
 use eddy::io::{
-    write_grid_vtk, AttrValue, GridField, GridFrame, Hdf5GridFrames, IoError, PvdSeries,
-    GRID_FORMAT, GRID_FORMAT_VERSION,
+    write_grid_vtk, AttrValue, GridField, GridFrame, Hdf5GridFrames, IoError, Precision, PvdSeries,
+    VtkOptions, GRID_FORMAT, GRID_FORMAT_VERSION,
 };
 use eddy::{Real, Vec3};
 use ndarray::{s, Array3, ShapeBuilder};
-use vtkio::model::{Attribute, DataSet, Extent, IOBuffer, ImageDataPiece, Piece, Vtk};
+
+use common::vtk_read::read_vtk;
+
+/// The scenes' default VTK storage.
+const OPTIONS: VtkOptions = VtkOptions {
+    precision: Precision::F32,
+    compression: 4,
+};
 
 /// Distinct sizes per axis, so a swapped axis changes the shape, not just the values.
 const DIMS: [usize; 3] = [4, 3, 2];
@@ -96,33 +103,6 @@ fn no_temp_files(dir: &Path) {
 
 // ---------------------------------------------------------------- VTK ImageData
 
-/// The geometry and single inline piece of a `.vti` read back by vtkio.
-fn read_vti(path: &Path) -> (Extent, [f32; 3], [f32; 3], ImageDataPiece) {
-    let vtk = Vtk::import(path).unwrap();
-    let DataSet::ImageData {
-        extent,
-        origin,
-        spacing,
-        mut pieces,
-        ..
-    } = vtk.data
-    else {
-        panic!("not ImageData: {:?}", vtk.data)
-    };
-    assert_eq!(pieces.len(), 1);
-    match pieces.remove(0) {
-        Piece::Inline(p) => (extent, origin, spacing, *p),
-        other => panic!("piece not inline: {other:?}"),
-    }
-}
-
-fn f64s(buf: &IOBuffer) -> Vec<Real> {
-    match buf {
-        IOBuffer::F64(v) => v.clone(),
-        other => panic!("expected f64 data, got {:?}", other.scalar_type()),
-    }
-}
-
 /// VTK's flat index of cell (i, j, k): x fastest.
 fn vtk_cell(i: usize, j: usize, k: usize) -> usize {
     let [nx, ny, _] = DIMS;
@@ -131,62 +111,68 @@ fn vtk_cell(i: usize, j: usize, k: usize) -> usize {
 
 #[test]
 fn vti_values_land_at_their_cells() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("grid_000007.vti");
-    let fields = Fields::new();
-    write_grid_vtk(&path, &fields.frame(7, 0.7)).unwrap();
-    no_temp_files(dir.path());
+    for (precision, level) in [
+        (Precision::F64, 0),
+        (Precision::F64, 6),
+        (Precision::F32, 1),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("grid_000007.vti");
+        let fields = Fields::new();
+        let options = VtkOptions {
+            precision,
+            compression: level,
+        };
+        write_grid_vtk(&path, &fields.frame(7, 0.7), options).unwrap();
+        no_temp_files(dir.path());
 
-    let (extent, origin, spacing, piece) = read_vti(&path);
-    let [nx, ny, nz] = DIMS.map(|n| n as i32);
-    let points = Extent::Ranges([0..=nx, 0..=ny, 0..=nz]);
-    assert_eq!(extent, points);
-    assert_eq!(piece.extent, points);
-    // vtkio reads the geometry back as f32 ...
-    assert_eq!(origin, [0.1f32, -0.25, (1.0 / 3.0) as f32]);
-    assert_eq!(spacing, [0.1f32; 3]);
-    // ... but the file holds the exact f64 values.
-    let text = fs::read_to_string(&path).unwrap();
-    assert!(
-        text.contains("Origin=\"0.1 -0.25 0.3333333333333333\" Spacing=\"0.1 0.1 0.1\""),
-        "{}",
-        &text[..text.len().min(400)]
-    );
-    assert!(text.starts_with("<VTKFile type=\"ImageData\""), "{text}");
-
-    assert!(piece.data.point.is_empty(), "values are cell data");
-    let arrays: Vec<_> = piece
-        .data
-        .cell
-        .iter()
-        .map(|a| match a {
-            Attribute::DataArray(d) => (d.name.as_str(), d.num_comp(), f64s(&d.data)),
-            other => panic!("unexpected attribute {other:?}"),
-        })
-        .collect();
-    assert_eq!(arrays.len(), 2);
-    let n = DIMS.iter().product::<usize>();
-    let (name, comps, marker_values) = &arrays[0];
-    assert_eq!((*name, *comps, marker_values.len()), ("marker", 1, n));
-    let (name, comps, velocity_values) = &arrays[1];
-    assert_eq!(
-        (*name, *comps, velocity_values.len()),
-        ("velocity", 3, 3 * n)
-    );
-    for (i, j, k) in cells() {
-        let c = vtk_cell(i, j, k);
+        let file = read_vtk(&path);
+        assert_eq!(file.attr("VTKFile", "type"), "ImageData");
+        let [nx, ny, nz] = DIMS;
+        let points = format!("0 {nx} 0 {ny} 0 {nz}");
+        assert_eq!(file.attr("ImageData", "WholeExtent"), points);
+        assert_eq!(file.attr("Piece", "Extent"), points);
+        // The geometry is exact whatever the arrays' precision.
         assert_eq!(
-            marker_values[c],
-            marker(i, j, k),
-            "marker at cell {:?}",
-            (i, j, k)
+            file.attr("ImageData", "Origin"),
+            "0.1 -0.25 0.3333333333333333"
+        );
+        assert_eq!(file.attr("ImageData", "Spacing"), "0.1 0.1 0.1");
+        assert_eq!(file.section("FieldData")[0].values, [0.7]);
+        assert!(file.section("PointData").is_empty(), "values are cell data");
+
+        let arrays = file.section("CellData");
+        assert_eq!(arrays.len(), 2);
+        let n = DIMS.iter().product::<usize>();
+        let (marker_values, velocity_values) = (&arrays[0].values, &arrays[1].values);
+        assert_eq!(
+            (arrays[0].name.as_str(), arrays[0].components),
+            ("marker", 1)
         );
         assert_eq!(
-            velocity_values[3 * c..3 * c + 3],
-            velocity(i, j, k),
-            "velocity at cell {:?}",
-            (i, j, k)
+            (arrays[1].name.as_str(), arrays[1].components),
+            ("velocity", 3)
         );
+        assert_eq!((marker_values.len(), velocity_values.len()), (n, 3 * n));
+        let stored = |v: Real| match precision {
+            Precision::F32 => v as f32 as Real,
+            Precision::F64 => v,
+        };
+        for (i, j, k) in cells() {
+            let c = vtk_cell(i, j, k);
+            assert_eq!(
+                marker_values[c],
+                marker(i, j, k),
+                "marker at cell {:?}",
+                (i, j, k)
+            );
+            assert_eq!(
+                velocity_values[3 * c..3 * c + 3],
+                velocity(i, j, k).map(stored),
+                "velocity at cell {:?}",
+                (i, j, k)
+            );
+        }
     }
 }
 
@@ -199,7 +185,7 @@ fn vti_series_lists_grid_frames() {
     for step in 0..2u64 {
         let name = format!("grid/grid_{step:06}.vti");
         let time = 0.5 * step as Real;
-        write_grid_vtk(&dir.path().join(&name), &fields.frame(step, time)).unwrap();
+        write_grid_vtk(&dir.path().join(&name), &fields.frame(step, time), OPTIONS).unwrap();
         series.push(time, &name).unwrap();
     }
     let text = fs::read_to_string(series.path()).unwrap();
@@ -212,8 +198,8 @@ fn vti_series_lists_grid_frames() {
     assert!(text.contains("timestep=\"0.5\""), "{text}");
     // Each entry resolves, relative to the .pvd, to a readable ImageData file.
     for f in files {
-        let (extent, ..) = read_vti(&dir.path().join(f));
-        assert_eq!(extent.into_dims(), [5, 4, 3]);
+        let file = read_vtk(&dir.path().join(f));
+        assert_eq!(file.attr("ImageData", "WholeExtent"), "0 4 0 3 0 2");
     }
 }
 
@@ -245,7 +231,7 @@ fn vti_rejects_bad_frames_without_writing() {
     ];
     for (name, frame, needle) in cases {
         let path = dir.path().join(name);
-        let err = write_grid_vtk(&path, &frame).unwrap_err();
+        let err = write_grid_vtk(&path, &frame, OPTIONS).unwrap_err();
         assert!(matches!(err, IoError::Invalid { .. }), "{name}: {err:?}");
         let msg = err.to_string();
         assert!(msg.contains(name) && msg.contains(needle), "{msg}");
@@ -260,14 +246,14 @@ fn vti_failed_write_leaves_nothing_half_written() {
     let frame = fields.frame(0, 0.0);
 
     let missing = dir.path().join("no_such_dir").join("g.vti");
-    let err = write_grid_vtk(&missing, &frame).unwrap_err();
+    let err = write_grid_vtk(&missing, &frame, OPTIONS).unwrap_err();
     assert!(err.to_string().contains("no_such_dir"), "{err}");
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
 
     // The whole file is written, then the rename onto a directory fails: the temporary goes.
     let blocked = dir.path().join("blocked.vti");
     fs::create_dir(&blocked).unwrap();
-    let err = write_grid_vtk(&blocked, &frame).unwrap_err();
+    let err = write_grid_vtk(&blocked, &frame, OPTIONS).unwrap_err();
     assert!(matches!(err, IoError::Io { .. }), "{err:?}");
     assert!(blocked.is_dir());
     no_temp_files(dir.path());
@@ -354,19 +340,15 @@ fn hdf5_grid_frames_roundtrip() {
     }
     drop(file);
 
-    // h5py sees the same layout, when it is installed.
-    let has_h5py = std::process::Command::new("python3")
-        .args(["-c", "import h5py"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if has_h5py {
+    // h5py sees the same layout.
+    if let Some(python) = common::python_with(&["h5py"]) {
         let script = "import sys, h5py\n\
                       f = h5py.File(sys.argv[1], 'r')\n\
                       g = f['frames/000001']\n\
                       m, v = g['marker'], g['velocity']\n\
                       print(m.shape, m.dtype, v.shape, v.dtype, int(g.attrs['step']))\n\
                       print(float(m[3, 2, 1]), float(v[3, 2, 1, 1]), [int(d) for d in f.attrs['dims']], f.attrs['format'])\n";
-        let out = std::process::Command::new("python3")
+        let out = std::process::Command::new(python)
             .args(["-c", script])
             .arg(&path)
             .output()
@@ -384,8 +366,6 @@ fn hdf5_grid_frames_roundtrip() {
                 velocity(3, 2, 1)[1]
             )
         );
-    } else {
-        eprintln!("h5py not importable: skipping the h5py read-back");
     }
 }
 

@@ -202,7 +202,7 @@ fn compare_survives_non_finite_and_huge_values() {
 
 /// A run's `frames.h5` survives `kill -9` at any point: whenever the index exists it opens,
 /// and every frame it lists reads back whole (each frame is its own file, renamed when
-/// complete, and the index is rewritten whole and renamed).
+/// complete, and the index is rewritten whole and renamed), and its XDMF parses.
 #[test]
 fn hdf5_frames_survive_a_kill_at_any_point() {
     let _serial = common::hdf5_or_child();
@@ -237,6 +237,27 @@ fn hdf5_frames_survive_a_kill_at_any_point() {
             let v = g.dataset("velocity").expect("velocity");
             assert_eq!(v.read_raw::<f64>().expect("velocities read").len(), 3 * n);
             assert!(g.attr("time").is_ok() && g.attr("step").is_ok());
+        }
+        // The XDMF is rewritten whole after the index: it parses, and describes the frames
+        // the index lists, or all but the newest.
+        let xmf = dir.path().join("frames.xmf");
+        if xmf.exists() {
+            let text = std::fs::read_to_string(&xmf).expect("frames.xmf reads");
+            let mut reader = quick_xml::Reader::from_str(&text);
+            let mut times = 0;
+            loop {
+                match reader.read_event().expect("frames.xmf is well-formed") {
+                    quick_xml::events::Event::Empty(e) if e.name().as_ref() == b"Time" => {
+                        times += 1
+                    }
+                    quick_xml::events::Event::Eof => break,
+                    _ => {}
+                }
+            }
+            assert!(
+                times == names.len() || times + 1 == names.len(),
+                "{times} of {names:?}"
+            );
         }
         listed.push(names.len());
     }

@@ -16,13 +16,6 @@ pub enum IoError {
         #[source]
         source: std::io::Error,
     },
-    /// vtkio could not serialize the data set.
-    #[error("writing VTK file {}: {source}", path.display())]
-    Vtk {
-        path: PathBuf,
-        #[source]
-        source: vtkio::Error,
-    },
     /// An HDF5 library call failed.
     #[error("HDF5 file {}: {action}: {message}", path.display())]
     Hdf5 {

@@ -16,6 +16,9 @@
 //! and renamed, so a kill at any point leaves an index that opens and lists only complete
 //! frames. No HDF5 file is ever modified in place.
 //!
+//! **XDMF.** After each frame `STEM.xmf` is rewritten (atomically) beside the index, describing
+//! every listed frame for ParaView's XDMF reader ([`super::xdmf`]).
+//!
 //! **Compression.** With a level from 1 to 9 ([`Hdf5Frames::compressed`]) every dataset is
 //! chunked whole, byte-shuffled and deflated, HDF5's own filters that h5py and ParaView read
 //! without plug-ins; level 0 writes contiguous datasets.
@@ -27,7 +30,7 @@ use hdf5::{File, Group};
 
 use super::atomic::temp_sibling;
 use super::frame::flatten;
-use super::{FieldData, IoError, ParticleFrame};
+use super::{xdmf, FieldData, IoError, ParticleFrame};
 use crate::Real;
 
 /// Group under which frames are listed; every member is a complete frame.
@@ -117,6 +120,10 @@ impl Hdf5Frames {
                 write_particles(group, frame, level)?;
                 write_sets(group, sets, level)
             },
+            |file| {
+                let own = xdmf::particle_grid("particles", file, "/", frame);
+                own.into_iter().chain(set_grids(file, sets)).collect()
+            },
         )
     }
 
@@ -145,6 +152,8 @@ pub(super) struct FrameIndex {
     frames: Vec<String>,
     /// Deflate level of the datasets, 0 to 9 (0: contiguous, uncompressed).
     pub(super) compression: u8,
+    /// Each listed frame's XDMF description.
+    xdmf: Vec<String>,
 }
 
 impl FrameIndex {
@@ -166,6 +175,7 @@ impl FrameIndex {
                 .collect(),
             frames: Vec::new(),
             compression: 0,
+            xdmf: Vec::new(),
         };
         index.write(&index.frames, |_| Ok(()))?;
         Ok(index)
@@ -176,20 +186,26 @@ impl FrameIndex {
         self.frames.len() as u64
     }
 
+    /// The index's file stem, which names its frame files.
+    pub(super) fn stem(&self) -> Result<&str, IoError> {
+        self.path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or_else(|| IoError::invalid(&self.path, "the file name is not UTF-8"))
+    }
+
     /// Writes the next frame's file (attributes `time`, `step`, content by `content`), then the
-    /// index listing it, with root attributes beyond the creation ones from `root`.
+    /// index listing it, with root attributes beyond the creation ones from `root`, then the
+    /// XDMF series with the frame's grids as `describe` gives them from the frame file's name.
     pub(super) fn append(
         &mut self,
         step: u64,
         time: Real,
         root: impl Fn(&Group) -> Result<(), Failure>,
         content: impl FnOnce(&Group) -> Result<(), Failure>,
+        describe: impl FnOnce(&str) -> Vec<String>,
     ) -> Result<(), IoError> {
-        let stem = self
-            .path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .ok_or_else(|| IoError::invalid(&self.path, "the file name is not UTF-8"))?;
+        let stem = self.stem()?.to_owned();
         let name = format!("{stem}_{:06}.h5", self.frames.len());
         let frame_path = self.path.with_file_name(&name);
         replace_file(&frame_path, |file| {
@@ -197,11 +213,14 @@ impl FrameIndex {
             write_scalar_attr(file, "step", &step)?;
             content(file)
         })?;
+        let grids = describe(&name);
         let mut frames = self.frames.clone();
         frames.push(name);
         self.write(&frames, root)?;
         self.frames = frames;
-        Ok(())
+        let k = self.xdmf.len();
+        self.xdmf.push(xdmf::frame(k, time, &grids));
+        xdmf::write_series(&self.path.with_extension("xmf"), &stem, &self.xdmf)
     }
 
     /// Replaces the index by one listing `frames`.
@@ -251,7 +270,7 @@ pub fn write_links(
 
 /// Builds an HDF5 file with `write` under a temporary sibling name and renames it onto `path`;
 /// on failure the temporary file is removed and `path` is left as it was.
-fn replace_file(
+pub(super) fn replace_file(
     path: &Path,
     write: impl FnOnce(&File) -> Result<(), Failure>,
 ) -> Result<(), IoError> {
@@ -349,6 +368,13 @@ pub(super) fn write_sets(
         write_particles(&sub, set, level)?;
     }
     Ok(())
+}
+
+/// The XDMF grids of particle sets written by [`write_sets`] into the frame file `file`.
+pub(super) fn set_grids(file: &str, sets: &[(&str, &ParticleFrame)]) -> Vec<String> {
+    sets.iter()
+        .filter_map(|(name, set)| xdmf::particle_grid(name, file, &format!("/{name}/"), set))
+        .collect()
 }
 
 /// Writes a particle frame's positions and fields as datasets of `group`.

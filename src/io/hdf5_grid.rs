@@ -22,9 +22,10 @@ use std::path::Path;
 use hdf5::Group;
 
 use super::hdf5_frames::{
-    ctx, validate_sets, write_dataset, write_scalar_attr, write_sets, Failure, FrameIndex,
+    ctx, replace_file, set_grids, validate_sets, write_dataset, write_scalar_attr, write_sets,
+    Failure, FrameIndex,
 };
-use super::{AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
+use super::{xdmf, AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
 use crate::{Real, Vec3};
 
 /// Value of the root attribute `format`, so readers can tell grid files from particle files.
@@ -131,6 +132,13 @@ impl Hdf5GridFrames {
             }
         }
         let level = self.index.compression;
+        let points = format!("{}_points.h5", self.index.stem()?);
+        if self.geometry.is_none() {
+            let (coordinates, shape) = xdmf::grid_points(frame);
+            replace_file(&self.index.path.with_file_name(&points), |file| {
+                write_dataset(file, "points", &coordinates, &shape, level)
+            })?;
+        }
         self.index.append(
             frame.step,
             frame.time,
@@ -138,6 +146,10 @@ impl Hdf5GridFrames {
             |group| {
                 write_fields(group, frame, level)?;
                 write_sets(group, sets, level)
+            },
+            |file| {
+                let own = xdmf::cell_grid("grid", file, &points, frame);
+                std::iter::once(own).chain(set_grids(file, sets)).collect()
             },
         )?;
         self.geometry = Some(geometry);

@@ -18,6 +18,8 @@ mod pvd;
 mod shard;
 mod vti;
 mod vtk;
+mod vtk_xml;
+mod xdmf;
 
 pub use atomic::write_atomic;
 pub use csv::CsvSeries;
@@ -32,3 +34,5 @@ pub use pvd::PvdSeries;
 pub use shard::parse_shard;
 pub use vti::write_grid_vtk;
 pub use vtk::write_particles_vtk;
+pub use vtk_xml::{Precision, VtkOptions};
+pub use xdmf::write_includes;

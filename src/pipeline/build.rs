@@ -17,7 +17,7 @@ use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::{GridError, GridSolver};
 use crate::io::read_velocity;
-use crate::io::{write_links, AttrValue, IoError};
+use crate::io::{write_includes, write_links, AttrValue, IoError, VtkOptions};
 use crate::metrics::Probe;
 use crate::refine;
 use crate::scene::{build, InitialFlow, Scene};
@@ -43,6 +43,8 @@ pub struct Frames {
     /// Simulated time between frames, s.
     pub interval: Real,
     pub vtk: bool,
+    /// How the VTK files store their arrays (`output.precision`, `output.compression`).
+    pub vtk_options: VtkOptions,
     pub hdf5: bool,
     /// Deflate level of the HDF5 datasets (`output.compression`).
     pub compression: u8,
@@ -366,6 +368,10 @@ impl Pipeline {
         let frames = Frames {
             interval: out.interval,
             vtk: out.vtk,
+            vtk_options: VtkOptions {
+                precision: out.precision,
+                compression: out.compression,
+            },
             hdf5: out.hdf5,
             compression: out.compression,
             attrs: vec![
@@ -431,7 +437,7 @@ impl Pipeline {
             let name = hdf5(Kind::Particles);
             f.particles = Some(ParticleFrames::new(
                 out,
-                f.vtk,
+                f.vtk.then_some(f.vtk_options),
                 name.as_deref().map(|n| (n, f.compression)),
                 &f.attrs,
                 sph,
@@ -441,7 +447,7 @@ impl Pipeline {
             let name = hdf5(Kind::Grid);
             f.grid = Some(GridFrames::new(
                 out,
-                f.vtk,
+                f.vtk.then_some(f.vtk_options),
                 name.as_deref().map(|n| (n, f.compression)),
                 &f.attrs,
                 grid,
@@ -455,10 +461,16 @@ impl Pipeline {
                 &f.attrs,
                 &[("particles", &links[0]), ("grid", &links[1])],
             )?;
+            let series = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.xmf", true));
+            write_includes(&out.join("frames.xmf"), &[&series[0], &series[1]])?;
         }
         for (w, name) in f.vortices.iter_mut().zip(vortex_sets(&self.sim)) {
             if let Some(name) = name {
-                *w = Some(VortexFrames::new(out, &name, f.vtk));
+                *w = Some(VortexFrames::new(
+                    out,
+                    &name,
+                    f.vtk.then_some(f.vtk_options),
+                ));
             }
         }
         Ok(())

@@ -69,7 +69,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
         }
     }
     if let (Some(w), Some(grid)) = (p.frames.grid.as_ref(), p.sim.grid.as_ref()) {
-        w.write_average(grid)?;
+        w.write_average(grid, p.frames.vtk_options)?;
     }
     let sph = p.sim.sph.as_ref();
     Ok(RunSummary {

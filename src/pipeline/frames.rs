@@ -7,7 +7,7 @@ use super::turbulence::Turbulence;
 use crate::grid::{forces::vorticity, GridSolver};
 use crate::io::{
     write_grid_vtk, write_particles_vtk, AttrValue, Field, GridField, GridFrame, Hdf5Frames,
-    Hdf5GridFrames, IoError, ParticleFrame, PvdSeries,
+    Hdf5GridFrames, IoError, ParticleFrame, PvdSeries, VtkOptions,
 };
 use crate::sph::SphSolver;
 use crate::vortex::VortexParticles;
@@ -35,17 +35,18 @@ impl Kind {
 /// The writers a scene asked for, for one kind of frame.
 struct Writers<H> {
     out: PathBuf,
-    pvd: Option<PvdSeries>,
+    /// The VTK series and how its files store their arrays, when the scene asked for VTK.
+    pvd: Option<(PvdSeries, VtkOptions)>,
     hdf5: Option<H>,
     count: usize,
 }
 
 impl<H> Writers<H> {
     /// The series `series.pvd` in `out` (with `vtk`) and the HDF5 file `hdf5`, when opened.
-    fn new(out: &Path, vtk: bool, series: &str, hdf5: Option<H>) -> Self {
+    fn new(out: &Path, vtk: Option<VtkOptions>, series: &str, hdf5: Option<H>) -> Self {
         Self {
             out: out.to_path_buf(),
-            pvd: vtk.then(|| PvdSeries::new(&out.join(format!("{series}.pvd")))),
+            pvd: vtk.map(|o| (PvdSeries::new(&out.join(format!("{series}.pvd"))), o)),
             hdf5,
             count: 0,
         }
@@ -62,12 +63,12 @@ impl<H> Writers<H> {
         frame: &F,
         time: Real,
         (name, ext): (&str, &str),
-        vtk: impl FnOnce(&Path, &F) -> Result<(), IoError>,
+        vtk: impl FnOnce(&Path, &F, VtkOptions) -> Result<(), IoError>,
         append: impl FnOnce(&mut H, &F) -> Result<(), IoError>,
     ) -> Result<(), IoError> {
-        if let Some(pvd) = self.pvd.as_mut() {
+        if let Some((pvd, options)) = self.pvd.as_mut() {
             let file = format!("{name}_{:06}.{ext}", self.count);
-            vtk(&self.out.join(&file), frame)?;
+            vtk(&self.out.join(&file), frame, *options)?;
             pvd.push(time, &file)?;
         }
         if let Some(h5) = self.hdf5.as_mut() {
@@ -86,7 +87,7 @@ impl ParticleFrames {
     /// asked for one.
     pub fn new(
         out: &Path,
-        vtk: bool,
+        vtk: Option<VtkOptions>,
         hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
         solver: &SphSolver,
@@ -171,7 +172,7 @@ impl Writers<Hdf5GridFrames> {
     /// grid in `out`.
     fn grid(
         out: &Path,
-        vtk: bool,
+        vtk: Option<VtkOptions>,
         series: &str,
         hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
@@ -193,7 +194,7 @@ impl GridFrames {
     /// level when the scene asked for one.
     pub fn new(
         out: &Path,
-        vtk: bool,
+        vtk: Option<VtkOptions>,
         hdf5: Option<(&str, u8)>,
         attrs: &[(&str, AttrValue)],
         solver: &GridSolver,
@@ -303,8 +304,9 @@ impl GridFrames {
         self.flow.count
     }
 
-    /// The time-averaged velocity as `average.vti`, when the grid keeps one.
-    pub fn write_average(&self, solver: &GridSolver) -> Result<(), IoError> {
+    /// The time-averaged velocity as `average.vti`, stored as `options` say, when the grid
+    /// keeps one.
+    pub fn write_average(&self, solver: &GridSolver, options: VtkOptions) -> Result<(), IoError> {
         let Some((_, avg)) = &solver.average else {
             return Ok(());
         };
@@ -323,7 +325,7 @@ impl GridFrames {
                 [vel[0].view(), vel[1].view(), vel[2].view()],
             )],
         };
-        write_grid_vtk(&self.flow.out.join("average.vti"), &frame)
+        write_grid_vtk(&self.flow.out.join("average.vti"), &frame, options)
     }
 }
 
@@ -377,7 +379,7 @@ pub struct VortexFrames(Writers<()>, String);
 
 impl VortexFrames {
     /// The series in `out` named `name`, written when `vtk`.
-    pub fn new(out: &Path, name: &str, vtk: bool) -> Self {
+    pub fn new(out: &Path, name: &str, vtk: Option<VtkOptions>) -> Self {
         Self(Writers::new(out, vtk, name, None), name.to_owned())
     }
 
@@ -400,16 +402,25 @@ impl VortexFrames {
 /// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
-    const FIXED: [&str; 6] = [
+    const FIXED: [&str; 8] = [
         "scene.toml",
         "average.vti",
         "particles.pvd",
         "grid.pvd",
         "smoke_fine.pvd",
         "smoke_fine.h5",
+        "smoke_fine.xmf",
+        "smoke_fine_points.h5",
     ];
     // Written once per medium in a scene with both, as `particles_NAME` and `grid_NAME`.
-    const PER_MEDIUM: [&str; 4] = ["metrics.csv", "probes.csv", "frames.h5", "vortices.pvd"];
+    const PER_MEDIUM: [&str; 6] = [
+        "metrics.csv",
+        "probes.csv",
+        "frames.h5",
+        "frames.xmf",
+        "frames_points.h5",
+        "vortices.pvd",
+    ];
     let six_digits =
         |n: Option<&str>| n.is_some_and(|n| n.len() == 6 && n.bytes().all(|b| b.is_ascii_digit()));
     let numbered = |s: &str, prefix: &str, ext: &str| {

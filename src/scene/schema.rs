@@ -157,11 +157,15 @@ pub struct Output {
     /// Write the frames into one `frames.h5` as well.
     #[serde(default)]
     pub hdf5: bool,
-    /// Deflate level of the HDF5 frames' datasets, 0 to 9 (0: uncompressed); each dataset is
-    /// chunked whole and byte-shuffled first, HDF5's built-in filters that h5py and ParaView
-    /// read as they are.
+    /// Compression level of the frames, 0 to 9 (0: uncompressed). HDF5 datasets are chunked
+    /// whole, byte-shuffled and deflated, HDF5's built-in filters that h5py and ParaView read
+    /// as they are; VTK arrays are appended raw in zlib blocks, as VTK's own writers do.
     #[serde(default = "default_compression")]
     pub compression: u8,
+    /// Precision of the VTK frames' arrays, "f32" (the default: half the bytes, for looking
+    /// at) or "f64" (the solver's values exactly). HDF5 frames are always f64.
+    #[serde(default)]
+    pub precision: crate::io::Precision,
     /// Columns of `metrics.csv` beyond step, time and dt; every metric when left out, none with [].
     #[serde(default = "default_metrics")]
     pub metrics: Vec<Metric>,
@@ -188,6 +192,7 @@ impl Default for Output {
             vtk: true,
             hdf5: false,
             compression: default_compression(),
+            precision: Default::default(),
             metrics: default_metrics(),
         }
     }

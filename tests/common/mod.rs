@@ -2,6 +2,9 @@
 
 use std::sync::{Mutex, MutexGuard};
 
+#[allow(dead_code)]
+pub mod vtk_read;
+
 /// HDF5 opens files without close-on-exec, so a child process spawned while another test of
 /// the same binary has a file open inherits its descriptor and with it the file lock; the next
 /// open of that file then fails with "unable to lock file" until the child exits. Tests that
@@ -123,4 +126,28 @@ pub fn abl_field(p: &eddy::pipeline::Pipeline) -> &[ndarray::Array3<eddy::Real>;
         .abl
         .as_ref()
         .expect("a grid scene carries omega_ABL on its cells")
+}
+
+/// A Python interpreter that imports `modules`, for tests that check files with the readers
+/// researchers use (h5py, VTK). `./dev test` installs them into `.venv` and names that Python
+/// in `EDDY_PYTHON`: then a missing module fails the test. Without `EDDY_PYTHON` (a plain
+/// `cargo test`) the `python3` on the path is tried and the check is skipped, said on stderr,
+/// when it lacks them.
+#[allow(dead_code)]
+pub fn python_with(modules: &[&str]) -> Option<std::path::PathBuf> {
+    let required = std::env::var_os("EDDY_PYTHON");
+    let python = required.clone().unwrap_or_else(|| "python3".into());
+    let imports = format!("import {}", modules.join(", "));
+    let works = std::process::Command::new(&python)
+        .args(["-c", &imports])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    match (works, required) {
+        (true, _) => Some(python.into()),
+        (false, Some(p)) => panic!("EDDY_PYTHON={p:?} cannot `{imports}`"),
+        (false, None) => {
+            eprintln!("skipped: python3 cannot `{imports}` (./dev test installs it)");
+            None
+        }
+    }
 }

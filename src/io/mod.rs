@@ -17,6 +17,7 @@ mod hdf5_read;
 pub mod plot;
 mod pvd;
 mod shard;
+pub mod slice;
 mod vti;
 mod vtk;
 

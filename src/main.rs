@@ -82,6 +82,10 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "column")]
         reference_csv: Option<PathBuf>,
     },
+    /// A quick look at a run without ParaView: a colour map of one field of its HDF5 frames on
+    /// a plane across an axis (the grid's cells, or the particles of a thin slab as dots), with
+    /// a colour bar, axes in metres and the time in the title.
+    Slice(cli::slice::SliceArgs),
     /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
     Lookup(cli::abl::LookupArgs),
     /// Summarise an artificial-boundary-layer database.
@@ -217,6 +221,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             }
             eprintln!("eddy: wrote {}", out.display());
         }
+        Command::Slice(args) => cli::slice::run(&args)?,
         Command::Lookup(args) => cli::abl::lookup(&args)?,
         Command::Info(args) => cli::abl::info(&args)?,
     }

@@ -4,4 +4,5 @@
 pub mod abl;
 pub mod analytic;
 pub mod bench;
+pub mod slice;
 pub mod sweep;

@@ -25,6 +25,7 @@ use super::hdf5_frames::{
     ctx, replace_file, set_grids, validate_sets, write_dataset, write_scalar_attr, write_sets,
     Failure, FrameIndex,
 };
+use super::hdf5_read::{FrameChoice, FrameSeries, StoredFrame};
 use super::{xdmf, AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
 use crate::{Real, Vec3};
 
@@ -38,10 +39,10 @@ const RESERVED: [&str; 5] = ["format", "format_version", "origin", "spacing", "d
 
 /// The grid every frame of a file shares.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Geometry {
-    origin: Vec3,
-    spacing: Real,
-    dims: [usize; 3],
+pub(crate) struct Geometry {
+    pub(crate) origin: Vec3,
+    pub(crate) spacing: Real,
+    pub(crate) dims: [usize; 3],
 }
 
 impl Geometry {
@@ -218,58 +219,17 @@ pub struct StoredVelocity {
 /// thread.
 pub fn read_velocity(path: &Path, frame: Option<usize>) -> Result<StoredVelocity, IoError> {
     let fail = |what: String| IoError::invalid(path, what);
-    let file = hdf5::File::open(path)
-        .map_err(|e| fail(format!("cannot open as HDF5 grid frames: {e}")))?;
-    let format = file
-        .attr("format")
-        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
-        .map_err(|_| fail("no root attribute `format`: not eddy grid frames".into()))?;
-    if format.as_str() != GRID_FORMAT {
-        return Err(fail(format!(
-            "root attribute `format` is {:?}, expected {GRID_FORMAT:?} (grid frames)",
-            format.as_str()
-        )));
-    }
-    let read = |name: &str| {
-        file.attr(name)
-            .and_then(|a| a.read_raw::<f64>())
-            .map_err(|e| fail(format!("root attribute `{name}`: {e}")))
-    };
-    let (origin, spacing) = (read("origin")?, read("spacing")?);
-    let dims = file
-        .attr("dims")
-        .and_then(|a| a.read_raw::<u64>())
-        .map_err(|e| fail(format!("root attribute `dims`: {e}")))?;
-    let (origin, dims) = match (origin.as_slice(), dims.as_slice(), spacing.as_slice()) {
-        (&[x, y, z], &[nx, ny, nz], &[_]) => (Vec3::new(x, y, z), [nx, ny, nz].map(|n| n as usize)),
-        _ => {
-            return Err(fail(
-                "root attributes origin, dims, spacing have wrong sizes".into(),
-            ))
-        }
-    };
-    let frames = file
-        .group("frames")
-        .and_then(|g| g.member_names())
-        .map_err(|e| fail(format!("no /frames group: {e}")))?;
-    let count = frames.len();
-    let k = match frame {
-        None if count > 0 => count - 1,
-        Some(k) if k < count => k,
-        _ => {
-            return Err(fail(format!(
-                "frame {} asked for, the file has {count} frame(s)",
-                frame.map_or("last".into(), |k| k.to_string())
-            )))
-        }
-    };
-    let group = file
-        .group(&format!("frames/{k:06}"))
-        .map_err(|e| fail(format!("frame {k}: {e}")))?;
-    let time = group
-        .attr("time")
-        .and_then(|a| a.read_scalar::<f64>())
-        .map_err(|e| fail(format!("frame {k}: attribute `time`: {e}")))?;
+    let series = FrameSeries::open(path)?;
+    let Geometry {
+        origin,
+        spacing,
+        dims,
+    } = grid_geometry(&series)?;
+    let StoredFrame {
+        index: k,
+        time,
+        group,
+    } = series.pick(frame.map_or(FrameChoice::Last, FrameChoice::Index))?;
     let data = group
         .dataset("velocity")
         .and_then(|d| d.read::<f64, ndarray::Ix4>())
@@ -285,10 +245,49 @@ pub fn read_velocity(path: &Path, frame: Option<usize>) -> Result<StoredVelocity
     }
     Ok(StoredVelocity {
         origin,
-        spacing: spacing[0],
+        spacing,
         dims,
         frame: k,
         time,
         velocity: std::array::from_fn(|c| data.index_axis(ndarray::Axis(3), c).to_owned()),
     })
+}
+
+/// The grid the frames of `series` share, refusing a series that is not grid frames.
+pub(crate) fn grid_geometry(series: &FrameSeries) -> Result<Geometry, IoError> {
+    let fail = |what: String| IoError::invalid(&series.path, what);
+    match series.format() {
+        Some(format) if format == GRID_FORMAT => {}
+        Some(other) => {
+            return Err(fail(format!(
+                "root attribute `format` is {other:?}, expected {GRID_FORMAT:?} (grid frames)"
+            )))
+        }
+        None => {
+            return Err(fail(
+                "no root attribute `format`: not eddy grid frames".into(),
+            ))
+        }
+    }
+    let file = &series.file;
+    let read = |name: &str| {
+        file.attr(name)
+            .and_then(|a| a.read_raw::<f64>())
+            .map_err(|e| fail(format!("root attribute `{name}`: {e}")))
+    };
+    let (origin, spacing) = (read("origin")?, read("spacing")?);
+    let dims = file
+        .attr("dims")
+        .and_then(|a| a.read_raw::<u64>())
+        .map_err(|e| fail(format!("root attribute `dims`: {e}")))?;
+    match (origin.as_slice(), dims.as_slice(), spacing.as_slice()) {
+        (&[x, y, z], &[nx, ny, nz], &[spacing]) => Ok(Geometry {
+            origin: Vec3::new(x, y, z),
+            spacing,
+            dims: [nx, ny, nz].map(|n| n as usize),
+        }),
+        _ => Err(fail(
+            "root attributes origin, dims, spacing have wrong sizes".into(),
+        )),
+    }
 }

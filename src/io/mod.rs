@@ -13,9 +13,11 @@ mod frame;
 mod grid_frame;
 mod hdf5_frames;
 mod hdf5_grid;
+mod hdf5_read;
 pub mod plot;
 mod pvd;
 mod shard;
+pub mod slice;
 mod vti;
 mod vtk;
 mod vtk_xml;
@@ -30,6 +32,7 @@ pub use hdf5_frames::{write_links, AttrValue, Hdf5Frames};
 pub use hdf5_grid::{
     read_velocity, Hdf5GridFrames, StoredVelocity, GRID_FORMAT, GRID_FORMAT_VERSION,
 };
+pub use hdf5_read::FrameChoice;
 pub use pvd::PvdSeries;
 pub use shard::parse_shard;
 pub use vti::write_grid_vtk;

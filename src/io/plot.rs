@@ -272,7 +272,7 @@ impl Figure for Compare<'_> {
 }
 
 /// The whole drawing area of a figure on backend `DB`.
-type Canvas<DB> = DrawingArea<DB, Shift>;
+pub(crate) type Canvas<DB> = DrawingArea<DB, Shift>;
 
 /// A chart with linear axes, as `compare` and the profile panel draw them.
 type LinearChart<'a, DB> = ChartContext<
@@ -282,7 +282,7 @@ type LinearChart<'a, DB> = ChartContext<
 >;
 
 /// A figure that draws itself on any backend ([`write_figure`] picks PNG or SVG).
-trait Figure {
+pub(crate) trait Figure {
     type Output;
     /// Draws onto the white `root`; `out` names the file in errors.
     fn draw<DB: DrawingBackend>(
@@ -365,7 +365,11 @@ where
 /// bitmap in the format its extension names (PNG for eddy's figures, with the bundled font).
 /// It is drawn under a temporary name and renamed to `out` when complete, so `out` is never
 /// half drawn.
-fn write_figure<F: Figure>(out: &Path, size: (u32, u32), figure: F) -> Result<F::Output, IoError> {
+pub(crate) fn write_figure<F: Figure>(
+    out: &Path,
+    size: (u32, u32),
+    figure: F,
+) -> Result<F::Output, IoError> {
     register_bundled_font();
     let name = out
         .file_name()

@@ -717,8 +717,8 @@ fn csv_nan_and_empty_columns() {
 }
 
 /// `output.compression`: at level 4 every non-empty dataset of a particle and a grid frame is
-/// chunked, shuffled and deflated (the filters h5py reports as `shuffle` and `gzip`), reads
-/// back bit for bit, and a field of few distinct values (a rest density, a solid flag) takes
+/// chunked, shuffled and deflated (the filters h5py reports as `shuffle` and `gzip`; the
+/// chunks compressed here and written raw), reads back bit for bit across several chunks, and a field of few distinct values (a rest density, a solid flag) takes
 /// less than half its raw size; at level 0 there are no filters.
 #[test]
 fn hdf5_frames_compress_losslessly() {
@@ -726,10 +726,11 @@ fn hdf5_frames_compress_losslessly() {
     use hdf5::filters::Filter;
     let _serial = common::hdf5_or_child();
     let dir = tempfile::tempdir().unwrap();
-    let n = 4000;
+    // Several chunks of about 1 MiB, the last one partial, for both kinds of frame.
+    let n = 100_003;
     let pos = positions(n, 0.5);
     let steps: Vec<Real> = (0..n).map(|i| 1000.0 + (i / 500) as Real).collect();
-    let cells = ndarray::Array3::from_shape_fn((16, 12, 8), |(i, j, k)| {
+    let cells = ndarray::Array3::from_shape_fn((96, 48, 40), |(i, j, k)| {
         (i as Real * 0.1).sin() + j as Real * 0.01 - k as Real
     });
     let mut sizes = Vec::new();
@@ -753,7 +754,7 @@ fn hdf5_frames_compress_losslessly() {
             time: 0.5,
             origin: Vec3::zeros(),
             spacing: 0.1,
-            dims: [16, 12, 8],
+            dims: [96, 48, 40],
             fields: vec![GridField::scalar("pressure", cells.view())],
         };
         grid.append(&frame).unwrap();

@@ -18,8 +18,10 @@ use crate::Real;
 pub struct CsvSeries {
     path: PathBuf,
     file: File,
-    columns: usize,
+    columns: Vec<String>,
     line: String,
+    /// The last row written, for readers that step a run themselves (the Python bindings).
+    last: Vec<Real>,
 }
 
 impl CsvSeries {
@@ -43,21 +45,22 @@ impl CsvSeries {
         Ok(CsvSeries {
             path: path.to_path_buf(),
             file,
-            columns: columns.len(),
+            columns: columns.to_vec(),
             line: String::new(),
+            last: Vec::new(),
         })
     }
 
     /// Appends one row; a row whose length differs from the header's is an error and writes
     /// nothing.
     pub fn row(&mut self, values: &[Real]) -> Result<(), IoError> {
-        if values.len() != self.columns {
+        if values.len() != self.columns.len() {
             return Err(IoError::invalid(
                 &self.path,
                 format!(
                     "CSV row has {} values for {} columns",
                     values.len(),
-                    self.columns
+                    self.columns.len()
                 ),
             ));
         }
@@ -71,7 +74,15 @@ impl CsvSeries {
         self.line.push('\n');
         self.file
             .write_all(self.line.as_bytes())
-            .map_err(|e| IoError::io(&self.path, "appending a row to", e))
+            .map_err(|e| IoError::io(&self.path, "appending a row to", e))?;
+        self.last = values.to_vec();
+        Ok(())
+    }
+
+    /// The last row written, column by column; empty before the first.
+    pub fn last_row(&self) -> impl Iterator<Item = (&str, Real)> {
+        let names = self.columns.iter().map(String::as_str);
+        names.zip(self.last.iter().copied())
     }
 
     /// The file's path.

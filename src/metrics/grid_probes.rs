@@ -152,6 +152,11 @@ pub struct GridProbeRecorder {
 }
 
 impl GridProbeRecorder {
+    /// The series it writes into.
+    pub fn series(&self) -> &CsvSeries {
+        &self.csv
+    }
+
     /// Creates `path` with step, time, then `NAME_p, NAME_vx, NAME_vy, NAME_vz` per point probe
     /// and `NAME_{fx,fy,fz}_{pressure,viscous}` per force probe. `body_index` maps an obstacle
     /// name to its index among the solver's bodies.

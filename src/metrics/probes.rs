@@ -39,6 +39,11 @@ pub fn front(x: &[Vec3], axis: usize, origin: Real) -> Real {
 }
 
 impl ProbeRecorder {
+    /// The series it writes into.
+    pub fn series(&self) -> &CsvSeries {
+        &self.csv
+    }
+
     /// Creates `path` with a header: step, time, then a front probe's name, or a point probe's
     /// `NAME_p, NAME_vx, NAME_vy, NAME_vz`.
     pub fn create(path: &Path, probes: &[Probe]) -> Result<Self, IoError> {

@@ -20,6 +20,11 @@ pub struct StateMetrics {
 }
 
 impl MetricsRecorder {
+    /// The series it writes into.
+    pub fn series(&self) -> &CsvSeries {
+        &self.csv
+    }
+
     /// Creates `path` with the header for `metrics`, then the `extra` columns another stage
     /// reports (the turbulence stage's).
     pub fn create(path: &Path, metrics: &[Metric], extra: &[String]) -> Result<Self, IoError> {

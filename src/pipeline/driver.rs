@@ -2,7 +2,7 @@
 //! (end time, step count, steady state), the progress bar, and the instability stop that keeps
 //! the frames written so far.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,105 +31,175 @@ struct End {
 
 /// Runs an already resolved scene into its output folder.
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let started = Instant::now();
-    options.check()?;
-    let scene = &options.apply(scene);
-    let out = output_dir(scene, options);
-    std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
-        path: out.clone(),
-        action: "creating the output folder",
-        source: e,
-    })?;
-    let removed = remove_earlier_outputs(&out)?;
-    if removed > 0 {
-        tracing::warn!(
-            "removed {removed} output files of an earlier run from {}",
-            out.display()
-        );
+    let mut run = Run::start(scene, options)?;
+    let bar = progress_bar(options.progress, &run.end);
+    let mut trace = Vec::new();
+    while let Some(rec) = run.advance(options.trace.then_some(&mut trace))? {
+        update_bar(&bar, &run.end, &run.pipeline, &rec);
     }
-    let resolved = scene.to_toml();
-    write_atomic(&out.join("scene.toml"), |w| {
-        w.write_all(resolved.as_bytes())
-    })?;
-    // A scene that cannot be built (no fluid cell, a stored flow on another grid) has written
-    // no frame: its error says what is wrong and nothing about frames.
-    let mut p = Pipeline::build(scene)?;
-    p.open(&out)?;
-    let end = End {
-        time: scene.time.end,
-        steps: scene.time.steps,
-        steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
-    };
-    let plan = Plan::of(&p);
-    let trace = drive(&mut p, &end, options, &out)?;
-    for (name, from, to, points) in &p.profiles {
-        if let Some(grid) = p.sim.grid.as_ref() {
-            let path = out.join(format!("profile_{name}.csv"));
-            write_profile(grid, &path, (*from).into(), (*to).into(), *points)?;
-        }
-    }
-    if let (Some(w), Some(grid)) = (p.frames.grid.as_ref(), p.sim.grid.as_ref()) {
-        w.write_average(grid, p.frames.vtk_options)?;
-    }
-    let sph = p.sim.sph.as_ref();
-    Ok(RunSummary {
-        out,
-        steps: p.sim.steps(),
-        time: p.sim.time(),
-        frames: p.frames.count(),
-        fluid_particles: sph.map_or(0, |s| s.fluid.len()),
-        boundary_particles: sph.map_or(0, |s| s.boundary.len()),
-        grid_cells: p.sim.grid.as_ref().map_or(0, |g| g.mac.cell_count()),
-        wall_seconds: started.elapsed().as_secs_f64(),
-        plan,
-        trace,
-    })
+    bar.finish_and_clear();
+    let mut summary = run.finish()?;
+    summary.trace = trace;
+    Ok(summary)
 }
 
-/// Steps `p` to its end; returns the stage trace when the options ask for one.
-fn drive(
-    p: &mut Pipeline,
-    end: &End,
-    options: &RunOptions,
-    out: &Path,
-) -> Result<Vec<String>, RunError> {
-    let bar = progress_bar(options.progress, end);
-    let mut trace = Vec::new();
-    // Frame k is at k times the interval (a product, so the times do not drift).
-    let mut frame: u64 = 0;
-    let interval = p.frames.interval;
-    let frame_time = |k: u64| k as Real * interval;
-    let mut steady = false;
-    loop {
+/// A run in progress: the built pipeline writing into its output folder, when the run ends and
+/// which frame is next. `eddy run` advances it to its end; the Python bindings a step at a
+/// time, through the same [`Run::advance`], so both write the same frames and rows.
+pub struct Run {
+    pub pipeline: Pipeline,
+    out: PathBuf,
+    end: End,
+    /// The next frame's index: frame k is at k times the interval (a product, so the times do
+    /// not drift).
+    frame: u64,
+    steady: bool,
+    /// Set once the end's frame is written.
+    ended: bool,
+    plan: Plan,
+    started: Instant,
+}
+
+impl Run {
+    /// Prepares the output folder (earlier outputs removed, the resolved `scene.toml`), builds
+    /// the pipeline and opens its outputs.
+    pub fn start(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+        let started = Instant::now();
+        options.check()?;
+        let scene = &options.apply(scene);
+        let out = output_dir(scene, options);
+        std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
+            path: out.clone(),
+            action: "creating the output folder",
+            source: e,
+        })?;
+        let removed = remove_earlier_outputs(&out)?;
+        if removed > 0 {
+            tracing::warn!(
+                "removed {removed} output files of an earlier run from {}",
+                out.display()
+            );
+        }
+        let resolved = scene.to_toml();
+        write_atomic(&out.join("scene.toml"), |w| {
+            w.write_all(resolved.as_bytes())
+        })?;
+        // A scene that cannot be built (no fluid cell, a stored flow on another grid) has
+        // written no frame: its error says what is wrong and nothing about frames.
+        let mut pipeline = Pipeline::build(scene)?;
+        pipeline.open(&out)?;
+        let plan = Plan::of(&pipeline);
+        Ok(Run {
+            pipeline,
+            out,
+            end: End {
+                time: scene.time.end,
+                steps: scene.time.steps,
+                steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
+            },
+            frame: 0,
+            steady: false,
+            ended: false,
+            plan,
+            started,
+        })
+    }
+
+    /// Writes the frame that is due, then takes one step; `None`, once the run has reached its
+    /// end (and written the end's frame). Steps land on the next frame time as on the end
+    /// time, whether or not frames are written, so a run's steps do not depend on its output
+    /// formats. With `trace`, appends the stages and parts the step ran.
+    pub fn advance(
+        &mut self,
+        trace: Option<&mut Vec<String>>,
+    ) -> Result<Option<StepRecord>, RunError> {
+        if self.ended {
+            return Ok(None);
+        }
+        let interval = self.pipeline.frames.interval;
+        let frame_time = |k: u64| k as Real * interval;
+        let (end, p) = (&self.end, &mut self.pipeline);
         let sim = &p.sim;
-        let done = steady
+        let done = self.steady
             || end.time.is_some_and(|t| sim.time() >= t - TIME_EPS)
             || end.steps.is_some_and(|n| sim.steps() >= n);
-        if sim.time() >= frame_time(frame) - TIME_EPS || done {
+        if sim.time() >= frame_time(self.frame) - TIME_EPS || done {
             p.frames.write(sim)?;
-            while frame_time(frame) <= sim.time() + TIME_EPS {
-                frame += 1;
+            while frame_time(self.frame) <= sim.time() + TIME_EPS {
+                self.frame += 1;
             }
         }
         if done {
-            break;
+            self.ended = true;
+            return Ok(None);
         }
-        // Steps land on the next frame time as on the end time, whether or not frames are
-        // written, so a run's steps do not depend on its output formats.
-        let target = end
-            .time
-            .map_or(frame_time(frame), |t| t.min(frame_time(frame)));
+        let next_frame = frame_time(self.frame);
+        let target = end.time.map_or(next_frame, |t| t.min(next_frame));
         let rec = p
-            .step(Some(target), options.trace.then_some(&mut trace))
-            .map_err(|e| stopped(e, p.frames.count(), out))?;
-        steady = end
+            .step(Some(target), trace)
+            .map_err(|e| stopped(e, p.frames.count(), &self.out))?;
+        self.steady = end
             .steady
             .zip(rec.grid)
             .is_some_and(|(tol, g)| g.change_rate < tol);
-        update_bar(&bar, end, p, &rec);
+        Ok(Some(rec))
     }
-    bar.finish_and_clear();
-    Ok(trace)
+
+    /// Whether the run has reached its end.
+    pub fn ended(&self) -> bool {
+        self.ended
+    }
+
+    /// The output folder.
+    pub fn out(&self) -> &Path {
+        &self.out
+    }
+
+    /// The stages the run was built with.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The last row of each CSV series the run writes (metrics, probes), by file name.
+    pub fn last_rows(&self) -> Vec<(String, Vec<(String, Real)>)> {
+        let stages = self.pipeline.stages.iter();
+        stages
+            .filter_map(|s| s.series())
+            .map(|csv| {
+                let file = csv.path().file_name().unwrap_or_default();
+                let row = csv.last_row().map(|(k, v)| (k.to_owned(), v)).collect();
+                (file.to_string_lossy().into_owned(), row)
+            })
+            .collect()
+    }
+
+    /// Writes what a run writes at its end (the line probes, the time-averaged velocity) and
+    /// says what it did; the trace is left empty. A run may go on stepping after it.
+    pub fn finish(&self) -> Result<RunSummary, RunError> {
+        let p = &self.pipeline;
+        for (name, from, to, points) in &p.profiles {
+            if let Some(grid) = p.sim.grid.as_ref() {
+                let path = self.out.join(format!("profile_{name}.csv"));
+                write_profile(grid, &path, (*from).into(), (*to).into(), *points)?;
+            }
+        }
+        if let (Some(w), Some(grid)) = (p.frames.grid.as_ref(), p.sim.grid.as_ref()) {
+            w.write_average(grid, p.frames.vtk_options)?;
+        }
+        let sph = p.sim.sph.as_ref();
+        Ok(RunSummary {
+            steps: p.sim.steps(),
+            time: p.sim.time(),
+            frames: p.frames.count(),
+            fluid_particles: sph.map_or(0, |s| s.fluid.len()),
+            boundary_particles: sph.map_or(0, |s| s.boundary.len()),
+            grid_cells: p.sim.grid.as_ref().map_or(0, |g| g.mac.cell_count()),
+            wall_seconds: self.started.elapsed().as_secs_f64(),
+            plan: self.plan.clone(),
+            trace: Vec::new(),
+            out: self.out.clone(),
+        })
+    }
 }
 
 /// A failed step as a run error that says how many frames were kept, and where.

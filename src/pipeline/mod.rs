@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 pub use build::{grid_solver, sph_solver, Frames, Pipeline};
 pub use coupling::{Exchange, DRAG_HEIGHT};
-pub use driver::run_scene;
+pub use driver::{run_scene, Run};
 pub use footprint::{available_memory, Footprint};
 pub use frames::{GridFrames, Kind, ParticleFrames};
 pub use plan::{Plan, PlannedStage};

@@ -48,6 +48,12 @@ pub trait Stage {
     fn ran<'a>(&self, _sim: &'a Simulation) -> &'a [&'static str] {
         &[]
     }
+
+    /// The CSV series it writes (metrics, probes) once opened, whose last row is the last
+    /// step's.
+    fn series(&self) -> Option<&CsvSeries> {
+        None
+    }
 }
 
 /// The SPH step over the shared `dt`: divergence solve, hooks, forces, pressure, positions.
@@ -142,6 +148,10 @@ impl Stage for SphProbes {
         }
         Ok(())
     }
+
+    fn series(&self) -> Option<&CsvSeries> {
+        self.recorder.as_ref().map(|r| r.series())
+    }
 }
 
 /// Point and force probes of a grid at the start of each step, into `probes.csv`.
@@ -177,6 +187,10 @@ impl Stage for GridProbes {
             r.record(sim.grid())?;
         }
         Ok(())
+    }
+
+    fn series(&self) -> Option<&CsvSeries> {
+        self.recorder.as_ref().map(|r| r.series())
     }
 }
 
@@ -237,6 +251,10 @@ impl Stage for SphMetrics {
         recorder.write(rec.step, rec.time, state, &stats, &extra)?;
         *state = recorder.measure(sim.sph(), &self.gravity);
         Ok(())
+    }
+
+    fn series(&self) -> Option<&CsvSeries> {
+        self.recorder.as_ref().map(|(r, _)| r.series())
     }
 }
 
@@ -367,5 +385,9 @@ impl Stage for GridMetrics {
         }
         csv.row(&row)?;
         Ok(())
+    }
+
+    fn series(&self) -> Option<&CsvSeries> {
+        self.csv.as_ref()
     }
 }

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use ndarray::{Array3, Zip};
+use ndarray::{Array3, ArrayView3, Zip};
 
 use super::advect::{advect, advect_velocity, advect_velocity_into};
 use super::average::RunningAverage;
@@ -202,6 +202,33 @@ impl GridSolver {
         }
         self.bounds.apply(&mut self.mac);
         self.project(1.0).map(|_| ())
+    }
+
+    /// Sets the face velocities (x, y and z faces, of the shapes of `mac.u`), then the boundary
+    /// conditions, as a scene's `initial_velocity` is set; the next step projects them. Used to
+    /// edit a flow between steps (the Python bindings).
+    pub fn set_faces(&mut self, faces: [ArrayView3<Real>; 3]) -> Result<(), GridError> {
+        for (a, f) in faces.iter().enumerate() {
+            let want = self.mac.u[a].shape();
+            if f.shape() != want {
+                return Err(GridError::Setting(format!(
+                    "{} faces of shape {:?}, the grid has {want:?}",
+                    ["x", "y", "z"][a],
+                    f.shape()
+                )));
+            }
+            if f.iter().any(|v| !v.is_finite()) {
+                let axis = ["x", "y", "z"][a];
+                return Err(GridError::Setting(format!(
+                    "{axis} faces: values must be finite"
+                )));
+            }
+        }
+        for (u, f) in self.mac.u.iter_mut().zip(faces) {
+            u.assign(&f);
+        }
+        self.bounds.apply(&mut self.mac);
+        Ok(())
     }
 
     /// Sets the relative residual of the pressure and viscosity solves from the next step on

@@ -145,6 +145,15 @@ impl Run {
         Ok(Some(rec))
     }
 
+    /// Tells every stage that the state was edited between steps (see
+    /// [`Stage::state_edited`](super::Stage::state_edited)).
+    pub fn state_edited(&mut self) {
+        let p = &mut self.pipeline;
+        for stage in &mut p.stages {
+            stage.state_edited(&p.sim);
+        }
+    }
+
     /// Whether the run has reached its end.
     pub fn ended(&self) -> bool {
         self.ended

@@ -28,8 +28,9 @@ pub struct StepRecord {
     pub exchange: Option<super::coupling::Exchange>,
 }
 
-/// One stage of a step.
-pub trait Stage {
+/// One stage of a step. Stages are `Send`, so a run can step on another thread than the one
+/// that built it (the Python bindings release the GIL while it steps).
+pub trait Stage: Send {
     /// Short name, for the plan and the stage trace.
     fn name(&self) -> &'static str;
 
@@ -54,6 +55,10 @@ pub trait Stage {
     fn series(&self) -> Option<&CsvSeries> {
         None
     }
+
+    /// The state was edited between steps (velocities written from Python): anything the
+    /// stage measured of it for its next row is measured again.
+    fn state_edited(&mut self, _sim: &Simulation) {}
 }
 
 /// The SPH step over the shared `dt`: divergence solve, hooks, forces, pressure, positions.
@@ -255,6 +260,12 @@ impl Stage for SphMetrics {
 
     fn series(&self) -> Option<&CsvSeries> {
         self.recorder.as_ref().map(|(r, _)| r.series())
+    }
+
+    fn state_edited(&mut self, sim: &Simulation) {
+        if let (Some((recorder, state)), Some(sph)) = (self.recorder.as_mut(), sim.sph.as_ref()) {
+            *state = recorder.measure(sph, &self.gravity);
+        }
     }
 }
 

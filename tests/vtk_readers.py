@@ -125,7 +125,7 @@ def check_xdmf(xmf):
     info = reader.GetOutputInformation(0)
     times = list(info.Get(vtkStreamingDemandDrivenPipeline.TIME_STEPS()) or [])
     assert times, f"{xmf}: no time steps"
-    grids = 0
+    grids = sets = 0
     for t in times:
         reader.UpdateTimeStep(t)
         assert not errors.messages, f"{xmf} at t = {t}: {errors.messages}"
@@ -159,12 +159,13 @@ def check_xdmf(xmf):
                     continue
                 # The frame's own particles lie at the file's root, a set in its group.
                 group = "" if base == "particles" else f"{base}/"
+                sets += base != "particles"
                 with h5py.File(frame_files(index)[times.index(t)], "r") as f:
                     points = vtk_to_numpy(block.GetPoints().GetData())
                     close(points, f[f"{group}position"][()], f"{xmf} t = {t} {name}")
                     for aname, values in arrays(block.GetPointData()).items():
                         close(values, f[f"{group}{aname}"][()], f"{xmf} t = {t} {aname}")
-    print(xmf.name, len(times), "times", grids, "grid blocks")
+    print(xmf.name, len(times), "times", grids, "grid blocks", sets, "particle set blocks")
 
 
 def main():

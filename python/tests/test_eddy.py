@@ -86,9 +86,10 @@ def test_particle_arrays_have_the_documented_shapes_and_units(tmp_path):
     assert sim.dt > 0 and sim.time == pytest.approx(sim.dt)
 
 
-def test_grid_arrays_have_the_documented_shapes(tmp_path):
-    sim = eddy.Simulation(eddy.Scene.load(SCENES / "abl_sphere_wake.toml",
-                                          overrides={"time.end": 0.3}), out=tmp_path)
+def test_grid_arrays_have_the_documented_shapes(tmp_path, sphere):
+    overrides = {"time.end": 0.3, "obstacles.0.abl.database": str(sphere)}
+    sim = eddy.Simulation(eddy.Scene.load(SCENES / "abl_sphere_wake.toml", overrides=overrides),
+                          out=tmp_path)
     sim.run()
     origin, h, (nx, ny, nz) = sim.grid_geometry
     assert (nx, ny, nz) == (64, 32, 32) and h == pytest.approx(6.0 / 64)
@@ -140,15 +141,25 @@ def test_written_grid_faces_run_as_the_cli_with_that_initial_field(tmp_path):
         sim.set_grid_faces(np.full_like(fx, np.inf), fy, fz)
 
 
-@pytest.fixture(scope="module")
-def ball(tmp_path_factory):
-    """A small database of the SPH scenes' ball, precomputed from Python."""
-    out = tmp_path_factory.mktemp("db") / "ball.h5"
-    computed = eddy.precompute(SCENES / "db" / "ball.toml", out, jobs=2, overrides={
+def coarse(name, tmp_path_factory):
+    """A small database of scenes/db/NAME.toml precomputed from Python (the shipped ones are
+    precomputed by `./dev demo`); its obstacle is the scene's, so scenes accept it."""
+    out = tmp_path_factory.mktemp("db") / f"{name}.h5"
+    computed = eddy.precompute(SCENES / "db" / f"{name}.toml", out, jobs=2, overrides={
         "grid.resolution": 16, "grid.stabilise_steps": 5, "grid.average_steps": 5,
         "sampling.translation": [3, 3], "sampling.rotation": [3, 3]})
     assert computed > 0
     return out
+
+
+@pytest.fixture(scope="module")
+def sphere(tmp_path_factory):
+    return coarse("sphere", tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def ball(tmp_path_factory):
+    return coarse("ball", tmp_path_factory)
 
 
 def test_lookups_equal_the_clis_at_sampled_directions(ball, tmp_path):
@@ -206,12 +217,12 @@ def test_bad_input_is_raised_naming_what_is_wrong(tmp_path):
         eddy.Database.open(tmp_path / "none.h5")
 
 
-def test_the_documented_example_runs_and_draws_the_smoke(tmp_path):
+def test_the_documented_example_runs_and_draws_the_smoke(tmp_path, sphere):
     """README's "Python" example, cut to 0.3 s: it runs, and its figure shows smoke."""
     figure = tmp_path / "smoke.png"
     done = subprocess.run(
-        [os.sys.executable, ROOT / "python" / "examples" / "sphere_wake_smoke.py", "0.3", figure,
-         tmp_path / "run"],
+        [os.sys.executable, ROOT / "python" / "examples" / "sphere_wake_smoke.py", "--end", "0.3",
+         "--figure", figure, "--out", tmp_path / "run", "--database", sphere],
         cwd=ROOT, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "t = 0.30 s" in done.stdout

@@ -17,6 +17,8 @@ use std::path::PathBuf;
 use eddy::abl::AblDatabase;
 use eddy::pipeline::{Run, RunError, RunOptions};
 use eddy::{Real, Vec3};
+use eddy_precompute::run::{Engine, Finished, Job, Threads};
+use eddy_precompute::solve::Surface;
 use numpy::ndarray::{Array1, Array2, Array3, ArrayView2, Axis};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};
 use pyo3::create_exception;
@@ -589,7 +591,8 @@ fn motions(value: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<Vec3>, bool)> 
 
 /// Precomputes the boundary-layer database of the obstacle file `obstacle` into `out`, with
 /// `jobs` directions at once (default: every core), as `eddy-precompute OBSTACLE --out OUT`;
-/// `resume` keeps the directions an earlier run finished. Returns the directions computed.
+/// `resume` keeps the directions an earlier run finished (Ctrl-C stops after the directions in
+/// flight and keeps those done). Returns the directions computed.
 #[pyfunction]
 #[pyo3(signature = (obstacle, out, jobs = None, resume = false, overrides = None))]
 fn precompute(
@@ -612,10 +615,47 @@ fn precompute(
             .max(1),
         progress: false,
     };
-    let summary = py
-        .detach(|| eddy_precompute::precompute(&spec, &options))
-        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let mut engine = Interruptible {
+        threads: Threads {
+            workers: options.workers,
+        },
+        interrupt: None,
+    };
+    let result = py.detach(|| eddy_precompute::precompute_with(&spec, &options, &mut engine));
+    if let Some(interrupt) = engine.interrupt {
+        return Err(interrupt);
+    }
+    let summary = result.map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
     Ok(summary.computed)
+}
+
+/// The precomputation's threads, stopping after the directions in flight when Python has a
+/// signal pending (Ctrl-C); the finished directions stay in the parts folder, for `resume`.
+struct Interruptible {
+    threads: Threads,
+    interrupt: Option<PyErr>,
+}
+
+impl Engine for Interruptible {
+    fn compute(
+        &mut self,
+        spec: &eddy_precompute::ObstacleSpec,
+        surface: &Surface,
+        todo: &[Job],
+        deliver: &mut dyn FnMut(Finished) -> bool,
+    ) {
+        let interrupt = &mut self.interrupt;
+        self.threads.compute(spec, surface, todo, &mut |finished| {
+            let keep = deliver(finished);
+            match Python::attach(|py| py.check_signals()) {
+                Ok(()) => keep,
+                Err(e) => {
+                    *interrupt = Some(e);
+                    false
+                }
+            }
+        });
+    }
 }
 
 #[pymodule]

@@ -229,3 +229,26 @@ def test_the_documented_example_runs_and_draws_the_smoke(tmp_path, sphere):
     import matplotlib.image
     pixels = matplotlib.image.imread(figure)
     assert pixels.shape[0] > 200 and pixels[..., :3].std() > 0.05
+
+
+def test_ctrl_c_stops_a_precomputation_and_resume_keeps_what_was_done(tmp_path):
+    out = tmp_path / "ball.h5"
+    script = ("import eddy, sys\n"
+              "try:\n"
+              "    eddy.precompute(sys.argv[1], sys.argv[2], jobs=1, overrides={'grid.resolution': 20})\n"
+              "    print('finished')\n"
+              "except KeyboardInterrupt:\n"
+              "    print('interrupted')\n")
+    child = subprocess.Popen([os.sys.executable, "-c", script, SCENES / "db" / "ball.toml", out],
+                             stdout=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    child.send_signal(2)  # SIGINT, as Ctrl-C
+    said, _ = child.communicate(timeout=60)
+    assert said.strip() == "interrupted" and not out.exists()
+    parts = pathlib.Path(f"{out}.parts")
+    assert parts.is_dir() and any(parts.iterdir())
+    # 32 directions in all (ball.toml's sampling); the interrupted run's are not computed again.
+    computed = eddy.precompute(SCENES / "db" / "ball.toml", out, jobs=2, resume=True,
+                               overrides={"grid.resolution": 20})
+    assert 0 < computed < 32
+    assert len(eddy.Database.open(out)) > 0

@@ -86,6 +86,14 @@ enum Command {
     /// a plane across an axis (the grid's cells, or the particles of a thin slab as dots), with
     /// a colour bar, axes in metres and the time in the title.
     Slice(cli::slice::SliceArgs),
+    /// The DFG cylinder benchmark (Schäfer & Turek 1996) from a run of scenes/dfg_2d1.toml
+    /// (steady, Re 20) or scenes/dfg_2d2.toml (periodic, Re 100): drag and lift coefficients,
+    /// the recirculation length or the Strouhal number, and the pressure difference across the
+    /// cylinder, each against the published band.
+    Dfg {
+        /// The run's output folder.
+        run: PathBuf,
+    },
     /// Look up artificial-boundary-layer vorticity in a precomputed database, written as CSV.
     Lookup(cli::abl::LookupArgs),
     /// Summarise an artificial-boundary-layer database.
@@ -156,6 +164,11 @@ fn run(command: Command) -> anyhow::Result<()> {
             cli::sweep::run(&args, &exe)?;
         }
         Command::PlotSweep(args) => cli::sweep::plot(&args)?,
+        Command::Dfg { run } => {
+            let rows = eddy::bench::dfg::evaluate(&run)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", run.display()))?;
+            print!("{}", eddy::bench::dfg::table(&rows));
+        }
         Command::Bench(args) => eddy::bench::run(&args.into())?,
         Command::BenchGrid(args) => eddy::bench::grid::run(&args.into())?,
         Command::BenchAbl(args) => {

@@ -923,3 +923,71 @@ z_max = "periodic"
         assert!((mass - 1.0).abs() < 1e-9, "{refinement}: total x {mass}");
     }
 }
+
+/// A point probe reads the fluid's side of an obstacle: on a box's face, the pressure of the
+/// fluid cells beside it (here a linear field), where the trilinear blend with the solid cells
+/// behind the face read a third low; a probe inside an obstacle is refused, naming both.
+#[test]
+fn point_probes_read_the_fluid_side_and_are_refused_inside_obstacles() {
+    use eddy::metrics::grid_probes::sample_point;
+    let text = |probe: [Real; 3]| {
+        format!(
+            r#"
+            name = "probe_at_a_wall"
+            gravity = [0.0, 0.0, 0.0]
+            domain = {{ min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }}
+            time = {{ end = 1.0 }}
+            viscosity = {{ kinematic = 0.01 }}
+            [grid]
+            resolution = [16, 16, 16]
+            [[obstacles]]
+            name = "block"
+            shape = {{ type = "box", half_extents = [0.2, 0.2, 0.2] }}
+            position = [0.5, 0.5, 0.5]
+            [[probes]]
+            type = "point"
+            name = "front"
+            position = [{}, {}, {}]
+            "#,
+            probe[0], probe[1], probe[2]
+        )
+    };
+    // On the block's upstream face, x = 0.3, between cell centres 0.28125 (fluid) and 0.34375.
+    let on_face = [0.3, 0.5, 0.5];
+    let s = scene_from(&text(on_face));
+    let mut p = eddy::pipeline::Pipeline::build(&s).expect("a probe on the surface is taken");
+    let g = p.sim.grid.as_mut().expect("a grid");
+    let h = g.mac.dx;
+    let solid = g.bounds.fluid_mask().mapv(|fluid| !fluid);
+    // The fluid's pressure rises along x; the solver leaves the solid cells at zero.
+    for ((i, j, k), v) in g.pressure.indexed_iter_mut() {
+        *v = if solid[[i, j, k]] {
+            0.0
+        } else {
+            1.0 + (i as Real + 0.5) * h
+        };
+    }
+    let x = Vec3::from(on_face);
+    let (read, _) = sample_point(g, &x);
+    // The fluid cells' layer beside the face, centres at x = 4.5 h, within h / 2 of the face.
+    let fluid_side = 1.0 + 4.5 * h;
+    assert!(
+        (read - fluid_side).abs() < 1e-12,
+        "{read} against {fluid_side}"
+    );
+    assert!((read - (1.0 + x.x)).abs() <= 0.5 * h);
+    let blend = g
+        .mac
+        .cell_stagger()
+        .sample(&g.pressure, g.mac.grid_coords(&x));
+    assert!(
+        blend < 0.75 * read,
+        "the blend {blend} would read {read} low"
+    );
+
+    let inside = eddy::pipeline::Pipeline::build(&scene_from(&text([0.45, 0.5, 0.5])));
+    let message = inside.err().expect("refused").to_string();
+    for needle in ["\"front\"", "probes.0.position", "\"block\"", "inside"] {
+        assert!(message.contains(needle), "{needle}: {message}");
+    }
+}

@@ -7,6 +7,7 @@
 pub mod abl;
 pub mod abl_particles;
 pub mod coupling;
+pub mod dfg;
 pub mod floors;
 pub mod grid;
 pub mod refine;

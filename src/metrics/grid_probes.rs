@@ -82,11 +82,55 @@ fn neighbour(
     Some(out)
 }
 
-/// Pressure (trilinear in the cell-centred field) and velocity at a world position.
+/// Pressure and velocity at a world position, as the fluid there holds them: the pressure from
+/// the fluid cells around it ([`fluid_sample`]); the velocity trilinear in the faces, whose
+/// values in and on an obstacle are its own velocity, the no-slip condition.
 pub fn sample_point(solver: &GridSolver, x: &Vec3) -> (Real, Vec3) {
-    let g = solver.mac.grid_coords(x);
-    let p = solver.mac.cell_stagger().sample(&solver.pressure, g);
-    (p, solver.mac.velocity_at(x))
+    (
+        fluid_sample(solver, &solver.pressure, x),
+        solver.mac.velocity_at(x),
+    )
+}
+
+/// A cell-centred `field` at `x` from the fluid cells only: trilinear in the eight cell centres
+/// around `x` with the solid ones left out and the others' weights renormalised, so a probe on
+/// an obstacle's surface reads the fluid beside it, not a blend with solid cells (whose
+/// pressure is no fluid's: the DFG cylinder's front stagnation point read half its value).
+/// Where all eight are solid, the nearest fluid cell centre within two cells; NaN if none.
+pub fn fluid_sample(solver: &GridSolver, field: &ndarray::Array3<Real>, x: &Vec3) -> Real {
+    let (mac, bounds) = (&solver.mac, &solver.bounds);
+    let g = mac.grid_coords(x);
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for (cell, w) in mac.cell_stagger().weights(g) {
+        if w > 0.0 && !bounds.is_solid(cell) {
+            sum += w * field[cell];
+            weight += w;
+        }
+    }
+    if weight > 0.0 {
+        return sum / weight;
+    }
+    let at = g.map(|c| (c - 0.5).round() as isize);
+    let mut nearest: Option<(Real, [usize; 3])> = None;
+    for di in -2..=2isize {
+        for dj in -2..=2isize {
+            for dk in -2..=2isize {
+                let c = [at[0] + di, at[1] + dj, at[2] + dk];
+                if (0..3).any(|a| !(0..mac.dims[a] as isize).contains(&c[a])) {
+                    continue;
+                }
+                let cell = c.map(|v| v as usize);
+                if bounds.is_solid(cell) {
+                    continue;
+                }
+                let d = (mac.cell_center(cell) - x).norm();
+                if nearest.is_none_or(|(best, _)| d < best) {
+                    nearest = Some((d, cell));
+                }
+            }
+        }
+    }
+    nearest.map_or(Real::NAN, |(_, cell)| field[cell])
 }
 
 /// The velocity at `x` with the domain's walls as boundary conditions: a tangential component's

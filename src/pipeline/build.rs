@@ -225,6 +225,31 @@ fn grid_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<GridSolver, RunEr
     Ok(solver)
 }
 
+/// Refuses a point probe inside an obstacle at the start: it would read no fluid. One on the
+/// surface reads the fluid beside it (`metrics::grid_probes::fluid_sample`).
+fn probes_in_the_fluid(scene: &Scene, bodies: &[RigidBody]) -> Result<(), RunError> {
+    let obstacles = &bodies[usize::from(scene.container.is_some())..];
+    for (k, probe) in scene.probes.iter().enumerate() {
+        let Probe::Point { name, position } = probe else {
+            continue;
+        };
+        let x = crate::Point3::from(*position);
+        for body in obstacles {
+            let depth = -body.signed_distance(0.0, &x);
+            // Rounding puts a point on the surface a few ulps either side of it.
+            if depth > 1e-9 * (1.0 + x.coords.norm()) {
+                return Err(RunError::Unsupported(format!(
+                    "probe {name:?} (`probes.{k}.position` = {position:?}) lies {depth:.3e} m \
+                     inside obstacle {:?}: a point probe reads the fluid, so put it on or \
+                     outside the surface",
+                    body.name()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Pipeline {
     /// Builds the solvers and stages of `scene`. Nothing is written.
     pub fn build(scene: &Scene) -> Result<Self, RunError> {
@@ -237,6 +262,7 @@ impl Pipeline {
         }
         // Built once (meshes are read here) for the estimate and both solvers.
         let bodies = build::bodies(scene)?;
+        probes_in_the_fluid(scene, &bodies)?;
         let footprint = Footprint::of(scene, &bodies);
         if let Some(available) = available_memory().filter(|&a| footprint.bytes > a) {
             return Err(RunError::TooLarge {

@@ -52,7 +52,7 @@ enum Command {
     /// Plot two columns of a sweep.csv against each other (log-log by default), one curve per
     /// value of a column: error against wall time, one curve per method.
     PlotSweep(cli::sweep::PlotArgs),
-    /// Time the SPH solvers on the 3D dam-break benchmark (see README, "Benchmarks").
+    /// Time the SPH solvers on the 3D dam-break benchmark (docs/src/benchmarks.md).
     Bench(cli::bench::BenchArgs),
     /// Time the MAC grid: smoke plume steps and Taylor-Green error against run time.
     BenchGrid(cli::bench::GridBenchArgs),
@@ -114,7 +114,7 @@ fn main() -> ExitCode {
     // The command runs on a worker of rayon's pool, not on the main thread: a parallel loop
     // started from outside the pool hands its work over and sleeps on a lock until it is done,
     // a wake-up per loop that a small scene pays for every loop of its step (the wind-over-tank
-    // grid alone: 2.3-2.7 -> 1.3-1.9 ms a step, README). From a worker the loop starts in place.
+    // grid alone: 2.3-2.7 -> 1.3-1.9 ms a step, docs/src/benchmarks.md). From a worker the loop starts in place.
     // Results are unchanged: every sum is in a fixed order (`parallel.rs`).
     match rayon::scope(|_| run(command)) {
         Ok(()) => ExitCode::SUCCESS,

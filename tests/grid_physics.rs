@@ -678,7 +678,7 @@ fn vorticity_confinement_adds_energy_to_vortices() {
 /// Re = U H / nu = 2, 16 cells across, 3 s (0.75 H^2 / nu). The step is small (nu dt / dx^2 =
 /// 0.16): the first-order pressure-correction splitting leaves an O(nu dt / dx^2) error in the
 /// cells next to a no-slip wall at steady state (the wall cell reads 6 % of U high at dt = 0.1 s,
-/// 2.3 % at 0.02, 1.0 % at 0.005, 0.7 % at 0.0025; README, MAC-grid choices).
+/// 2.3 % at 0.02, 1.0 % at 0.005, 0.7 % at 0.0025; docs/src/mac-grid.md).
 #[test]
 fn profiled_inflows_carry_plane_poiseuille_flow() {
     let (u, h, w) = (0.1, 0.2, 0.025);

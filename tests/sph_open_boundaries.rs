@@ -1,6 +1,6 @@
 //! Open boundaries of the SPH fluid: a channel with an inflow and an outflow carries the flow
 //! rate the inflow injects and stops growing; the laminar flow between two plates approaches
-//! plane Poiseuille flow (to the floor the README gives); no particle enters through the
+//! plane Poiseuille flow (to the floor docs/src/sph.md gives); no particle enters through the
 //! outflow or leaves through the inflow; the refinements and carried fields follow the
 //! changing count; bad emitters are refused.
 
@@ -376,7 +376,7 @@ fn a_plane_profile_inflow_carries_its_parabola() {
 /// layer's velocity against plane Poiseuille flow of the same flux, 6 U y (H - y) / H^2 at each
 /// particle's own height. The target is 5 % of the peak; this measures 6.3 % (the
 /// second layer fast, the middle slow; 5.4 % at 20 across), a floor set by how the particles
-/// layer under shear, not by the solver's tolerance (README, "Open boundaries"). So it guards
+/// layer under shear, not by the solver's tolerance (docs/src/sph.md, "Open boundaries"). So it guards
 /// that floor: within 7 %, the profile rising to its peak in the middle, and the first layer
 /// slower than a third of the peak (a free-slip wall would let it run at the mean).
 #[test]

@@ -560,7 +560,7 @@ fn a_scene_the_analytic_solution_does_not_describe_is_refused() {
 /// `scenes/reference/martin_moyce_1952.csv`, scaled to a = 0.5 m, its source in `#` comment
 /// lines) at 0.04 m: the sweep's error is the relative L2 of the run's front, interpolated
 /// linearly to the table's times, recomputed here from `probes.csv`; it is under 12 % (9.5 %
-/// measured; eddy's front runs ahead of the experiment's, README "Parameter studies").
+/// measured; eddy's front runs ahead of the experiment's, docs/src/parameter-studies.md).
 #[test]
 fn the_surge_front_is_compared_with_martin_and_moyce() {
     let table = concat!(

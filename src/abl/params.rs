@@ -109,7 +109,7 @@ pub const GRID_DISSIPATION: Real = 2.0;
 /// 2-cell threshold is one flow cell; on particles the kernels are sampled exactly at every
 /// particle, with no face average to blur them. At 2 spacings the seeds near the river's walls
 /// were born at the threshold (71 % within 1/8 of it) and their first split's children were
-/// dissipated at once: 5 particles alive against 171 at 1 spacing (README, SPH scenes).
+/// dissipated at once: 5 particles alive against 171 at 1 spacing (docs/src/abl-sph.md).
 pub const PARTICLE_DISSIPATION: Real = 1.0;
 
 impl TurbulenceParams {

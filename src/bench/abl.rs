@@ -555,7 +555,7 @@ fn read_profiles(
         .collect())
 }
 
-/// The table as the README prints it.
+/// The table as docs/src/abl-grid.md prints it.
 pub fn table(rows: &[AblBenchRow]) -> String {
     let reference = rows
         .iter()

@@ -122,7 +122,7 @@ pub fn evaluate(run: &Path) -> Result<Vec<Row>, String> {
             .column("u")
             .ok_or("profile_centreline.csv has no u")?;
         // The last step is shortened to land on the end time, and a projection's pressure
-        // depends on its step (README, "MAC-grid choices"): the state is read at the step
+        // depends on its step (docs/src/mac-grid.md): the state is read at the step
         // before, a whole CFL step like the run's others.
         let at = last.saturating_sub(1);
         let values = [

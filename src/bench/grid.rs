@@ -1,4 +1,4 @@
-//! `eddy bench-grid`: the MAC-grid benchmarks of the README. Step time of the smoke plume
+//! `eddy bench-grid`: the MAC-grid benchmarks of docs/src/benchmarks.md. Step time of the smoke plume
 //! (advection, projection, total, pressure iterations) at several resolutions, the set-up of
 //! mantaflow's simple plume so the two can be compared; and the Taylor–Green energy error
 //! against run time for both advection schemes, with and without advection–reflection, at

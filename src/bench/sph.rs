@@ -1,5 +1,5 @@
 //! `eddy bench`: step time of the SPH solvers on the SPlisHSPlasH 3D dam-break set-up, so the
-//! comparison in the README can be rerun. A cube of water (1 m, n^3 particles) sits in the corner
+//! comparison in docs/src/benchmarks.md can be rerun. A cube of water (1 m, n^3 particles) sits in the corner
 //! of a closed 4 x 3 x 1.5 m tank; fixed dt 1.92 ms, cubic kernel, density tolerance 0.05 %,
 //! divergence tolerance 0.1 %, at least 2 density and 1 divergence iterations (the peer's rule),
 //! viscosity 0.01. The scene file `scenes/bench_dam_break.toml` is the same set-up at the 97k

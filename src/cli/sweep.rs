@@ -48,8 +48,8 @@ pub struct SweepArgs {
     /// sweep.csv (default: sweep.csv in the first folder).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Error of each run against an analytic solution eddy knows (README, "Parameter
-    /// studies"): `taylor-green` (a scene with grid.initial_flow = "taylor_green"): the largest
+    /// Error of each run against an analytic solution eddy knows
+    /// (docs/src/parameter-studies.md): `taylor-green` (a scene with grid.initial_flow = "taylor_green"): the largest
     /// |ln(E / E_exact)| of the energy decay over the run; `hydrostatic` (a fluid with gravity
     /// and point probes): the probes' pressure over the run's second half against rho |g|
     /// depth; `poiseuille` (a grid channel periodic in x between walls at y, driven by gravity
@@ -58,7 +58,7 @@ pub struct SweepArgs {
     #[arg(long, value_enum)]
     pub analytic: Option<Analytic>,
     /// A reference run's folder: each --compare column of the runs is compared with its own
-    /// (relative L2 norm over the reference's rows; see the README).
+    /// (relative L2 norm over the reference's rows; see docs/src/parameter-studies.md).
     #[arg(long, value_name = "RUN_DIR", requires = "compare")]
     pub reference: Option<PathBuf>,
     /// A column compared with the reference run: metrics:NAME or probes:NAME (against time),

@@ -399,7 +399,7 @@ impl VortexFrames {
     }
 }
 
-/// Whether `name` is a file a run writes (see the README's table of outputs), so that a run into
+/// Whether `name` is a file a run writes (see the table in docs/src/outputs.md), so that a run into
 /// a folder can clear an earlier run's files and ParaView never mixes two runs.
 pub fn is_run_output(name: &str) -> bool {
     const FIXED: [&str; 8] = [

@@ -2,7 +2,7 @@
 //!
 //! Every struct denies unknown keys, so a misspelt key is an error rather than a silently ignored
 //! setting. Defaults are the values a user gets when a key is left out; they are documented on
-//! each field and in the README's "Scene files" table.
+//! each field and in the book's "Scene files" chapter (docs/src/scene-files.md).
 
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;

@@ -20,7 +20,7 @@
 //! neighbourhood leaves a particle's own pressure almost no effect on its density. A layer
 //! further in with a larger gain has the same density at the first layer and a steeper rise
 //! towards the wall. Measured on `hydrostatic_tank.toml` and the dam break of the tests
-//! (README, "SPH choices"): at 0.5 IISPH diverges and the dam break goes unstable; the deeper
+//! (docs/src/sph.md): at 0.5 IISPH diverges and the dam break goes unstable; the deeper
 //! the layer, the better the column holds (potential energy down 0.36 J of 125.6 in 2 s at
 //! 0.8), but the stiffer wall hands stored compression back as energy (0.02 % in one step of
 //! the dam break at 0.8, 7e-6 at 0.65); at 0.6 no step gains 1e-6, and the column's

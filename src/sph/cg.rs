@@ -2,7 +2,7 @@
 //!
 //! Why: the Jacobi solves of [`super::dfsph`] clamp the pressure at zero, so that a free surface
 //! does not pull; a fluid that fills its walls then cannot hold the suction behind an obstacle,
-//! and the wake cavitates (README, "Open boundaries"). Unclamped, the Jacobi iteration gains
+//! and the wake cavitates (docs/src/sph.md, "Open boundaries"). Unclamped, the Jacobi iteration gains
 //! energy and diverges: its diagonal estimate is no contraction for errors of both signs.
 //!
 //! The pressure acceleration of a stiffness field k,

@@ -187,8 +187,8 @@ pub(crate) fn xml_escape(s: &str) -> String {
     out
 }
 
-/// `attrs` as the opening tag's attribute list of a data element (`PointData`, `CellData`):
-/// the first scalar and first vector array named as the active ones, as VTK's writers do.
+/// The attributes of a data element's opening tag (`PointData`, `CellData`) that name its
+/// active scalar and vector arrays (the first of each, as VTK's writers choose them).
 pub(super) fn active_arrays(scalars: Option<&str>, vectors: Option<&str>) -> String {
     let mut s = String::new();
     if let Some(n) = scalars {

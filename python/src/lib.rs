@@ -421,7 +421,7 @@ impl Simulation {
                 PyValueError::new_err(format!("medium {m:?}: \"grid\" or \"particles\""))
             })?,
             None if have.len() == 1 => have[0],
-            None if have.is_empty() => sets.first().expect("two media"),
+            None if have.is_empty() => &sets[0],
             None => {
                 return Err(PyValueError::new_err(
                     "the scene has vortex particles in both media: pass medium=\"grid\" or \

@@ -32,6 +32,7 @@ use rayon::prelude::*;
 
 use super::atomic::temp_sibling;
 use super::frame::flatten;
+use super::zlib::zlib;
 use super::{xdmf, FieldData, IoError, ParticleFrame};
 use crate::Real;
 
@@ -430,7 +431,7 @@ pub(super) fn write_dataset(
     let ds = ctx(builder.deflate(level).shape(shape).create(name), what)?;
     let chunks: Vec<Vec<u8>> = data
         .par_chunks(rows * row)
-        .map(|values| deflate(&shuffle(values, rows * row), level))
+        .map(|values| zlib(&shuffle(values, rows * row), level))
         .collect();
     hdf5::sync::sync(|| {
         for (k, bytes) in chunks.iter().enumerate() {
@@ -469,14 +470,4 @@ fn shuffle(values: &[Real], len: usize) -> Vec<u8> {
         }
     }
     out
-}
-
-/// `bytes` as one zlib stream at `level`: what HDF5's deflate filter stores.
-fn deflate(bytes: &[u8], level: u8) -> Vec<u8> {
-    use std::io::Write;
-    let level = flate2::Compression::new(u32::from(level.min(9)));
-    let mut z = flate2::write::ZlibEncoder::new(Vec::with_capacity(bytes.len() / 2), level);
-    // Writing into a Vec cannot fail.
-    z.write_all(bytes).expect("zlib into memory");
-    z.finish().expect("zlib into memory")
 }

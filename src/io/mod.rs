@@ -22,6 +22,7 @@ mod vti;
 mod vtk;
 mod vtk_xml;
 mod xdmf;
+mod zlib;
 
 pub use atomic::write_atomic;
 pub use csv::CsvSeries;

@@ -16,11 +16,10 @@
 use std::fmt::Write as _;
 use std::io::Write;
 
-use flate2::write::ZlibEncoder;
-use flate2::Compression;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::zlib::zlib;
 use crate::Real;
 
 /// Bytes of an array compressed as one block: VTK's reader allocates one block at a time, and
@@ -152,12 +151,7 @@ fn to_bytes<T: Sync, const N: usize>(values: &[T], le: impl Fn(&T) -> [u8; N] + 
 fn compress_into(out: &mut Vec<u8>, bytes: &[u8], level: u8) {
     let blocks: Vec<Vec<u8>> = bytes
         .par_chunks(BLOCK)
-        .map(|block| {
-            let mut z = ZlibEncoder::new(Vec::new(), Compression::new(u32::from(level.min(9))));
-            // Writing into a Vec cannot fail.
-            z.write_all(block).expect("zlib into memory");
-            z.finish().expect("zlib into memory")
-        })
+        .map(|block| zlib(block, level))
         .collect();
     let partial = bytes.len() % BLOCK;
     let header = [blocks.len(), BLOCK, partial]

@@ -2,6 +2,8 @@
 //! (radius a quarter of the box) at 32^3, 64^3 and 128^3, relative residual 1e-6, seeded white-
 //! noise right-hand side. Prints iterations, build time (hierarchy and components, paid once per
 //! step) and solve time (best of a few repeats), and the same for implicit diffusion at a = 1e4.
+//! The sphere is voxelised by cell centres, and then, as a scene's obstacle, once a staircase and
+//! once cutting cells (faces weighted by their open fraction): the cost of cut cells.
 
 use eddy::grid::{
     solve_diffusion, Boundary, CellKind, DiffusionBoundary, DiffusionSide, PoissonSystem,
@@ -41,6 +43,28 @@ fn sphere_box(n: usize) -> Array3<CellKind> {
     })
 }
 
+/// A closed unit box of n^3 cells with the sphere of [`sphere_box`] as a scene's obstacle,
+/// `surface` its `grid.obstacle_surface`.
+fn sphere_scene(n: usize, surface: &str) -> eddy::grid::GridSolver {
+    let text = format!(
+        r#"
+        name = "sphere in a box"
+        domain = {{ min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }}
+        time = {{ end = 1.0 }}
+        [grid]
+        resolution = [{n}, {n}, {n}]
+        obstacle_surface = "{surface}"
+        [[obstacles]]
+        name = "sphere"
+        shape = {{ type = "sphere", radius = 0.25 }}
+        position = [0.5, 0.5, 0.5]
+        "#
+    );
+    let scene = eddy::scene::parse_str(&text, std::path::Path::new("bench.toml"), &[])
+        .expect("the bench scene is valid");
+    eddy::pipeline::grid_solver(&scene).expect("the grid builds")
+}
+
 /// Mean CPU seconds per repeat since `start`, as a table cell.
 fn cpu_per_solve(start: Option<f64>) -> String {
     match (start, cpu_seconds()) {
@@ -65,12 +89,20 @@ fn main() -> Result<(), eddy::grid::SolveError> {
     println!("threads: {}", rayon::current_num_threads());
     println!("| solve | n^3 | levels | iterations | build (ms) | solve (ms) | ms / iteration | CPU s / solve (all threads) |");
     println!("|---|---|---|---|---|---|---|---|");
-    for &n in &sizes {
-        let cells = sphere_box(n);
+    let systems = |n: usize| {
+        let voxels = (sphere_box(n), None);
+        let [staircase, cut] = ["staircase", "cut"].map(|surface| {
+            let g = sphere_scene(n, surface);
+            (g.bounds.cell_kinds(), g.bounds.face_fractions([n; 3]))
+        });
+        [("pressure", voxels), ("pressure, staircase", staircase), ("pressure, cut cells", cut)]
+    };
+    for (label, (cells, fractions)) in sizes.iter().flat_map(|&n| systems(n)) {
+        let n = cells.dim().0;
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let rhs = Array3::from_shape_fn((n, n, n), |_| rng.random::<f64>() * 2.0 - 1.0);
         let t = Instant::now();
-        let mut sys = PoissonSystem::new(&cells, Boundary::closed());
+        let mut sys = PoissonSystem::with_fractions(&cells, Boundary::closed(), fractions);
         let build = t.elapsed().as_secs_f64();
         let mut best = f64::INFINITY;
         let mut stats = Default::default();
@@ -82,7 +114,7 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             best = best.min(t.elapsed().as_secs_f64());
         }
         println!(
-            "| pressure | {n} | {} | {} | {:.1} | {:.1} | {:.2} | {} |",
+            "| {label} | {n} | {} | {} | {:.1} | {:.1} | {:.2} | {} |",
             stats.levels,
             stats.iterations,
             build * 1e3,

@@ -295,6 +295,8 @@ fn solvers_build_from_parameters_alone() {
         smoke_refinement: 1,
         average_from: None,
         container: false,
+        obstacle_surface: Default::default(),
+        incremental_pressure: true,
     };
     let mut g = GridSolver::new(&grid, Vec::new()).expect("grid builds");
     for _ in 0..5 {

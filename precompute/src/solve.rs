@@ -88,6 +88,8 @@ pub fn grid(
         smoke_refinement: 1,
         average_from: None,
         container: false,
+        obstacle_surface: g.obstacle_surface,
+        incremental_pressure: g.incremental_pressure,
     };
     Ok((params, spec.body_entry(angular)))
 }

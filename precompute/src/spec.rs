@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use eddy::abl::{geometry_fingerprint, hash_hex, Sampling};
 use eddy::geometry::RigidBody;
-use eddy::scene::{Advection, Body, Shape};
+use eddy::scene::{Advection, Body, ObstacleSurface, Shape};
 use eddy::Real;
 use serde::{Deserialize, Serialize};
 
@@ -100,6 +100,12 @@ pub struct GridSettings {
     /// Advection scheme of the velocity.
     #[serde(default = "d_advection")]
     pub advection: Advection,
+    /// How the obstacle meets the cells: `cut` or `staircase` (the scenes' `grid.obstacle_surface`).
+    #[serde(default)]
+    pub obstacle_surface: ObstacleSurface,
+    /// Project the pressure's increment only (the scenes' `grid.incremental_pressure`).
+    #[serde(default = "d_true")]
+    pub incremental_pressure: bool,
     /// Relative residual of the pressure and viscosity solves while averaging. 1e-3 moves
     /// omega_pre by 8e-4 of itself against 1e-5 for a spinning sphere at 64^3 (2e-6 for a
     /// translating one) for a fifth less time per rotation.
@@ -165,6 +171,9 @@ pub struct SamplingSettings {
     pub rotation: [usize; 2],
 }
 
+fn d_true() -> bool {
+    true
+}
 fn d_resolution() -> PerAxis<usize> {
     PerAxis::Same(32)
 }

@@ -138,16 +138,19 @@ pub fn evaluate(run: &Path) -> Result<Vec<Row>, String> {
         let (t, l, d) = (&time[from..], &lift[from..], &drag[from..]);
         let period = period(t, l).ok_or("the lift does not oscillate: no shedding to measure")?;
         let max = |v: &[Real]| v.iter().copied().fold(Real::NEG_INFINITY, Real::max);
-        // dp half a period after the last lift maximum (the benchmark's t0 + 1 / (2 f)).
-        let peak = l
+        // dp half a period after the last lift maximum that has one after it (the
+        // benchmark's t0 + 1 / (2 f)); a maximum is a crest of the oscillation, above half
+        // its height, not a wiggle.
+        let crest = 0.5 * max(l);
+        let at = l
             .iter()
             .enumerate()
             .rev()
             .skip(1)
-            .find(|&(i, v)| i > 0 && *v >= l[i - 1] && *v >= l[i + 1])
-            .map(|(i, _)| t[i])
-            .ok_or("no lift maximum")?;
-        let at = peak + 0.5 * period;
+            .filter(|&(i, v)| i > 0 && *v > crest && *v >= l[i - 1] && *v >= l[i + 1])
+            .map(|(i, _)| t[i] + 0.5 * period)
+            .find(|&at| at <= time[last])
+            .ok_or("no lift maximum half a period before the run's end")?;
         let dp_at = interpolate(&time, &dp, at).ok_or("the run ends before t0 + T/2")?;
         let values = [max(d), max(l), s.diameter / (period * s.mean), dp_at];
         rows(&PERIODIC, values)

@@ -2,18 +2,24 @@
 //! cells. A face is *fixed* when its velocity is prescribed (a wall, an inflow, or a face touching
 //! an obstacle cell, which carries the obstacle's velocity there); the projection and the
 //! viscosity solve leave fixed faces alone, which is the solid velocity boundary condition.
+//!
+//! With cut cells ([`ObstacleSurface::Cut`]) only the faces an obstacle covers entirely are
+//! fixed; a partly covered face is free, weighs its open fraction in the projection, and its
+//! covered part carries the obstacle's velocity in the divergence ([`Boundaries::add_outflow`]).
 
 use ndarray::{s, Array3, Axis, Zip};
 use rayon::prelude::*;
 
+use super::cut::CutFaces;
 use super::diffusion::{DiffusionBoundary, DiffusionSide};
 use super::inflow_turbulence::InflowModes;
 use super::liquid::Liquid;
 use super::mac::{cells_beside_face, MacGrid};
-use super::params::GridSide;
-use super::poisson::{Boundary, CellKind, Side};
+use super::params::{GridSide, ObstacleSurface};
+use super::poisson::{Boundary, CellKind, FaceFractions, Side};
 use crate::geometry::RigidBody;
 use crate::{Point3, Real, Vec3};
+use std::sync::Arc;
 
 /// Owner value of a cell no obstacle covers.
 const FLUID: u16 = u16::MAX;
@@ -31,26 +37,52 @@ pub struct Boundaries {
     owner: Array3<u16>,
     /// Faces whose velocity is prescribed, per component.
     pub fixed: [Array3<bool>; 3],
-    /// The prescribed velocity of fixed faces (0 elsewhere), per component.
+    /// The prescribed velocity of fixed faces, and the obstacle's velocity on partly covered
+    /// faces (0 elsewhere), per component.
     pub fixed_value: [Array3<Real>; 3],
     /// Faces with a static obstacle cell on both sides: their values only ever enter
     /// interpolation, so advection reads velocity extrapolated from the fluid there.
     inside: [Array3<bool>; 3],
+    /// With cut cells, the obstacles' faces and the partly covered ones.
+    cut: Option<Cut>,
+}
+
+/// The cut cells' state: the faces' open fractions and distances, and the partly covered faces.
+#[derive(Debug, Clone)]
+struct Cut {
+    faces: Arc<CutFaces>,
+    partial: Vec<PartialFace>,
+}
+
+/// A free face an obstacle covers in part (one per face: on a periodic axis the last face,
+/// the first one's copy, is left out).
+#[derive(Debug, Clone, Copy)]
+struct PartialFace {
+    axis: usize,
+    idx: [usize; 3],
+    open: Real,
+    /// The obstacle's normal velocity there.
+    solid: Real,
 }
 
 impl Boundaries {
     /// Voxelises `bodies` at time `t` (with `container`, the first body holds the fluid: the
-    /// cells outside it are its) and the cells `liquid` covers, and classifies every face.
+    /// cells outside it are its) and the cells `liquid` covers, and classifies every face; with
+    /// cut cells, from the obstacles' open fractions.
     pub fn new(
         grid: &MacGrid,
         sides: [[GridSide; 2]; 3],
         bodies: &[RigidBody],
         t: Real,
-        container: bool,
+        (container, surface): (bool, ObstacleSurface),
         liquid: Option<&Liquid>,
     ) -> Self {
         let owner = voxelize(grid, bodies, t, container);
-        Self::from_owner(grid, sides, owner, bodies, t, liquid)
+        // A container (a coupled scene's tank) stays voxelised: the water's cells lie along it.
+        let cut_bodies = &bodies[usize::from(container).min(bodies.len())..];
+        let cut = (surface == ObstacleSurface::Cut && !cut_bodies.is_empty())
+            .then(|| Arc::new(CutFaces::new(grid, cut_bodies, t)));
+        Self::from_owner(grid, sides, owner, bodies, t, liquid, cut)
     }
 
     /// These boundaries with the coupled liquid replaced by `liquid`, the obstacles where they
@@ -63,7 +95,8 @@ impl Boundaries {
         liquid: Option<&Liquid>,
     ) -> Self {
         let owner = self.owner.mapv(|o| if o == LIQUID { FLUID } else { o });
-        Self::from_owner(grid, self.sides.clone(), owner, bodies, t, liquid)
+        let cut = self.cut.as_ref().map(|c| c.faces.clone());
+        Self::from_owner(grid, self.sides.clone(), owner, bodies, t, liquid, cut)
     }
 
     fn from_owner(
@@ -73,6 +106,7 @@ impl Boundaries {
         bodies: &[RigidBody],
         t: Real,
         liquid: Option<&Liquid>,
+        cut: Option<Arc<CutFaces>>,
     ) -> Self {
         if let Some(liquid) = liquid {
             Zip::from(&mut owner)
@@ -89,8 +123,13 @@ impl Boundaries {
             fixed: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
             fixed_value: std::array::from_fn(|a| Array3::zeros(grid.u[a].raw_dim())),
             inside: std::array::from_fn(|a| Array3::from_elem(grid.u[a].raw_dim(), false)),
+            cut: None,
         };
         b.classify_faces(grid, bodies, t, liquid);
+        if let Some(faces) = cut {
+            let container = bodies.len() - faces.bodies();
+            b.open_cut_faces(grid, &bodies[container..], container, t, faces);
+        }
         b
     }
 
@@ -120,15 +159,77 @@ impl Boundaries {
         (o != FLUID && o != LIQUID).then_some(o as usize)
     }
 
-    /// The cell kinds of the pressure solve.
+    /// The cell kinds of the pressure solve: the fluid cells, and with cut cells the obstacle
+    /// cells with a free face too (the fluid holds part of them).
     pub fn cell_kinds(&self) -> Array3<CellKind> {
-        self.owner.mapv(|o| {
+        let mut kinds = self.owner.mapv(|o| {
             if o == FLUID {
                 CellKind::Fluid
             } else {
                 CellKind::Solid
             }
+        });
+        if self.cut.is_some() {
+            Zip::indexed(&mut kinds)
+                .and(&self.owner)
+                .par_for_each(|(i, j, k), kind, &o| {
+                    if o != FLUID && o != LIQUID && self.has_free_face([i, j, k]) {
+                        *kind = CellKind::Fluid;
+                    }
+                });
+        }
+        kinds
+    }
+
+    /// Whether the projection solves for the pressure of cell `idx`: a fluid cell, or with cut
+    /// cells an obstacle cell with a free face (its pressure is the fluid's, continued).
+    pub fn has_pressure(&self, idx: [usize; 3]) -> bool {
+        let o = self.owner[idx];
+        o == FLUID || (self.cut.is_some() && o != LIQUID && self.has_free_face(idx))
+    }
+
+    /// Whether one of the six faces of `cell` is free.
+    fn has_free_face(&self, cell: [usize; 3]) -> bool {
+        (0..3).any(|a| {
+            let mut upper = cell;
+            upper[a] += 1;
+            !self.fixed[a][cell] || !self.fixed[a][upper]
         })
+    }
+
+    /// With cut cells, the open fractions the pressure system weighs its faces by.
+    pub fn face_fractions(&self, dims: [usize; 3]) -> Option<FaceFractions> {
+        self.cut.as_ref().map(|c| c.faces.upper_fractions(dims))
+    }
+
+    /// With cut cells, the obstacles' faces (open fractions and face-centre distances).
+    pub fn cut_faces(&self) -> Option<&CutFaces> {
+        self.cut.as_ref().map(|c| &*c.faces)
+    }
+
+    /// Adds `sign` times the net outflow through the covered parts of the partly covered faces,
+    /// sum (1 - open) (u_obstacle - u) . n, to `out`: with it, `grid`'s net outflow is that of
+    /// the fluid's faces at their velocity and the obstacle's at its own (Ng, Min & Gibou 2009,
+    /// Eq. 11's right-hand side).
+    pub fn add_outflow(&self, grid: &MacGrid, sign: Real, out: &mut Array3<Real>) {
+        let Some(cut) = &self.cut else {
+            return;
+        };
+        let periodic = self.periodic();
+        for p in &cut.partial {
+            let a = p.axis;
+            let flux = sign * (1.0 - p.open) * (p.solid - grid.u[a][p.idx]);
+            let (below, above) = cells_beside_face(p.idx[a], grid.dims[a], periodic[a]);
+            let mut cell = p.idx;
+            if let Some(c) = below {
+                cell[a] = c;
+                out[cell] += flux;
+            }
+            if let Some(c) = above {
+                cell[a] = c;
+                out[cell] -= flux;
+            }
+        }
     }
 
     /// Periodic axes.
@@ -305,6 +406,75 @@ impl Boundaries {
         }
     }
 
+    /// Frees the faces an obstacle does not cover entirely, and fixes those it covers between
+    /// two fluid cells (a thin part of it), from the open fractions of `faces` (of `bodies`, the
+    /// obstacles after the `container` ones, 0 or 1); a side's, a liquid's and a container's
+    /// faces keep their conditions. Collects the partly covered free faces.
+    fn open_cut_faces(
+        &mut self,
+        grid: &MacGrid,
+        bodies: &[RigidBody],
+        container: usize,
+        t: Real,
+        faces: Arc<CutFaces>,
+    ) {
+        let periodic = self.periodic();
+        let owner = &self.owner;
+        let is_obstacle = |o: u16| o != FLUID && o != LIQUID;
+        for a in 0..3 {
+            let n = grid.dims[a];
+            Zip::indexed(&mut self.fixed[a])
+                .and(&mut self.fixed_value[a])
+                .and(&mut self.inside[a])
+                .and(&faces.open[a])
+                .par_for_each(|(i, j, k), fixed, value, inside, &open| {
+                    let idx = [i, j, k];
+                    let (Some(l), Some(r)) = cells_beside_face(idx[a], n, periodic[a]) else {
+                        return;
+                    };
+                    let beside = [l, r].map(|c| {
+                        let mut cell = idx;
+                        cell[a] = c;
+                        owner[cell]
+                    });
+                    if beside.contains(&LIQUID)
+                        || beside.iter().any(|&o| usize::from(o) < container)
+                    {
+                        return;
+                    }
+                    let obstacle = beside.iter().any(|&o| is_obstacle(o));
+                    if open <= 0.0 {
+                        if !obstacle {
+                            *fixed = true;
+                            *value = obstacle_velocity(bodies, t, grid.face_center(a, idx), a);
+                        }
+                    } else if obstacle || open < 1.0 {
+                        *fixed = false;
+                        *inside = false;
+                        if !obstacle {
+                            *value = obstacle_velocity(bodies, t, grid.face_center(a, idx), a);
+                        }
+                    }
+                });
+        }
+        let mut partial = Vec::new();
+        for a in 0..3 {
+            let last = grid.dims[a] - usize::from(periodic[a]);
+            for ((i, j, k), &open) in faces.open[a].indexed_iter() {
+                let idx = [i, j, k];
+                if open > 0.0 && open < 1.0 && !self.fixed[a][idx] && idx[a] <= last {
+                    partial.push(PartialFace {
+                        axis: a,
+                        idx,
+                        open: Real::from(open),
+                        solid: self.fixed_value[a][idx],
+                    });
+                }
+            }
+        }
+        self.cut = Some(Cut { faces, partial });
+    }
+
     /// Marks the fixed faces of every component and their velocities, a row of faces along z
     /// at a time over flat slices (a moving obstacle reclassifies every face on every step).
     /// An obstacle's velocity comes first, then a side's, then the liquid's.
@@ -422,6 +592,19 @@ impl Boundaries {
     }
 }
 
+/// Component `a` of the velocity at `x` of the obstacle nearest inside (smallest signed
+/// distance) among `bodies` at time `t`.
+fn obstacle_velocity(bodies: &[RigidBody], t: Real, x: Vec3, a: usize) -> Real {
+    let x = Point3::from(x);
+    bodies
+        .iter()
+        .min_by(|p, q| {
+            p.signed_distance(t, &x)
+                .total_cmp(&q.signed_distance(t, &x))
+        })
+        .map_or(0.0, |b| b.velocity_at(t, &x)[a])
+}
+
 /// The cells of `grid` outside every obstacle at `t` (inside the container with `container`).
 pub(super) fn voxel_free(
     grid: &MacGrid,
@@ -463,7 +646,7 @@ fn voxelize(grid: &MacGrid, bodies: &[RigidBody], t: Real, container: bool) -> A
 
 /// The ranges of cell indices whose centres may lie within `margin` (m) of `body` at time `t`
 /// (its world bounding box, widened by half a cell).
-pub(super) fn cells_near(
+pub fn cells_near(
     grid: &MacGrid,
     body: &RigidBody,
     t: Real,

@@ -44,7 +44,7 @@ pub fn solve_diffusion(
     x: &mut Array3<Real>,
     settings: &SolverSettings,
 ) -> Result<SolveStats, SolveError> {
-    DiffusionSystem::new(unknown, boundary, a)?.solve(x, settings)
+    DiffusionSystem::new(unknown, boundary, a, None)?.solve(x, settings)
 }
 
 /// The diffusion system `(1 + a L)` of one set of unknowns, sides and `a`, with its multigrid
@@ -59,26 +59,33 @@ pub struct DiffusionSystem {
     stencil: FineStencil,
     multigrid: Multigrid,
     work: Workspace,
-    /// The unknowns next to fixed cells, with those neighbours: the only cells whose right-hand
-    /// side is not just their old value.
-    fixed_neighbours: Vec<(usize, Vec<usize>)>,
+    /// The unknowns next to fixed cells, with those neighbours and their faces' weights: the
+    /// only cells whose right-hand side is not just their old value.
+    fixed_neighbours: Vec<(usize, Vec<(usize, f64)>)>,
 }
 
-/// Every unknown with fixed (Dirichlet) neighbours, and their indices in the order the
-/// right-hand side adds them (axis by axis, lower neighbour first).
-fn fixed_neighbours(problem: &Problem) -> Vec<(usize, Vec<usize>)> {
+/// Every unknown with fixed (Dirichlet) neighbours, and their indices and face weights in the
+/// order the right-hand side adds them (axis by axis, lower neighbour first).
+fn fixed_neighbours(problem: &Problem) -> Vec<(usize, Vec<(usize, f64)>)> {
     let layout = problem.layout;
+    let weight = |axis: usize, lower: usize| {
+        problem
+            .weights
+            .as_ref()
+            .map_or(1.0, |w| f64::from(w[axis][lower]))
+    };
     (0..layout.len())
         .filter(|&idx| problem.kinds[idx] == FLUID)
         .filter_map(|idx| {
             let c = coordinates(&layout, idx);
-            let fixed: Vec<usize> = (0..3)
+            let fixed: Vec<(usize, f64)> = (0..3)
                 .flat_map(|axis| [false, true].map(|up| (axis, up)))
                 .filter_map(|(axis, up)| {
                     let mut nb = c;
                     nb[axis] = layout.step(axis, c[axis], up)?;
                     let j = layout.index(nb[0], nb[1], nb[2]);
-                    (problem.kinds[j] == DIRICHLET).then_some(j)
+                    let w = weight(axis, if up { idx } else { j });
+                    (problem.kinds[j] == DIRICHLET).then_some((j, w))
                 })
                 .collect();
             (!fixed.is_empty()).then_some((idx, fixed))
@@ -87,11 +94,15 @@ fn fixed_neighbours(problem: &Problem) -> Vec<(usize, Vec<usize>)> {
 }
 
 impl DiffusionSystem {
-    /// The system of [`solve_diffusion`]'s `unknown`, `boundary` and `a`.
+    /// The system of [`solve_diffusion`]'s `unknown`, `boundary` and `a`; `weights` scale each
+    /// face's term (per axis, the face between each cell and its upper neighbour, flat C
+    /// order): the ghost-fluid wall of cut cells, where the face to a fixed value at distance
+    /// s dx weighs 1 / s.
     pub fn new(
         unknown: &Array3<bool>,
         boundary: &DiffusionBoundary,
         a: Real,
+        weights: Option<[Vec<f32>; 3]>,
     ) -> Result<Self, SolveError> {
         if !(a >= 0.0 && a.is_finite()) {
             return Err(SolveError::InvalidParameter {
@@ -118,6 +129,7 @@ impl DiffusionSystem {
             side_weight,
             shift: 1.0,
             scale: a,
+            weights,
         };
         let dirichlet = problem.dirichlet_table();
         let stencil = FineStencil::new(&problem, &dirichlet);
@@ -135,9 +147,18 @@ impl DiffusionSystem {
         })
     }
 
-    /// Whether this is the system of `unknown`, `boundary` and `a` (bit for bit).
-    pub fn matches(&self, unknown: &Array3<bool>, boundary: &DiffusionBoundary, a: Real) -> bool {
-        self.a.to_bits() == a.to_bits() && self.boundary == *boundary && self.unknown == *unknown
+    /// Whether this is the system of `unknown`, `boundary`, `a` and `weights` (bit for bit).
+    pub fn matches(
+        &self,
+        unknown: &Array3<bool>,
+        boundary: &DiffusionBoundary,
+        a: Real,
+        weights: &Option<[Vec<f32>; 3]>,
+    ) -> bool {
+        self.a.to_bits() == a.to_bits()
+            && self.boundary == *boundary
+            && self.unknown == *unknown
+            && self.problem.weights == *weights
     }
 
     /// Solves `(1 + a L) x_new = x_old` as [`solve_diffusion`] does; `x` is the initial guess.
@@ -185,7 +206,7 @@ impl DiffusionSystem {
                 }
             });
         for (cell, neighbours) in &self.fixed_neighbours {
-            let fixed = neighbours.iter().fold(0.0, |s, &j| s + old[j]);
+            let fixed = neighbours.iter().fold(0.0, |s, &(j, w)| s + w * old[j]);
             work.b[*cell] = old[*cell] + a * fixed;
         }
         let stats = SolveStats {

@@ -7,6 +7,7 @@ pub mod advect;
 pub mod average;
 pub mod boundary;
 mod components;
+pub mod cut;
 pub mod diffusion;
 pub mod fine;
 pub mod forces;
@@ -36,8 +37,8 @@ pub use interp::Stagger;
 pub use liquid::Liquid;
 pub use mac::MacGrid;
 pub use params::{
-    Advection, GridBoundary, GridParams, GridSide, InflowProfile, ProfileShape, Smoke, SmokeSource,
-    ViscosityScheme,
+    Advection, GridBoundary, GridParams, GridSide, InflowProfile, ObstacleSurface, ProfileShape,
+    Smoke, SmokeSource, ViscosityScheme,
 };
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,

@@ -215,7 +215,7 @@ impl LevelView for FineView<'_> {
         self.problem.kinds[idx]
     }
     fn upper(&self, axis: usize, idx: usize) -> f32 {
-        f32::from(u8::from(self.stencil.upper_face(axis, idx))) * self.problem.scale as f32
+        self.stencil.upper_weight(axis, idx) * self.problem.scale as f32
     }
     fn dirichlet(&self, axis: usize, idx: usize) -> f32 {
         f32::from(self.dirichlet.get(idx)[axis]) * self.problem.scale as f32

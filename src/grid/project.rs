@@ -2,7 +2,9 @@
 //! cell. With y = p dt / (rho dx) the update of a free face is u -= y_right - y_left, and the
 //! net outflow D(u) of a cell changes by (A y), A the unit-spacing Laplacian of
 //! [`PoissonSystem`]; so A y = -D(u) makes it vanish. Fixed faces (walls, inflow, obstacles) are
-//! not updated, which is the Neumann condition A leaves out; open sides hold y = 0.
+//! not updated, which is the Neumann condition A leaves out; open sides hold y = 0. With cut
+//! cells every term of D and A weighs its face's open fraction ([`Boundaries::add_outflow`],
+//! [`PoissonSystem::with_fractions`]), and the update is the same.
 
 use ndarray::{Array3, Zip};
 use rayon::prelude::*;
@@ -10,21 +12,32 @@ use rayon::prelude::*;
 use super::boundary::Boundaries;
 use super::interp::standard;
 use super::mac::{cells_beside_face, MacGrid};
-use super::poisson::{PoissonSystem, SolveError, SolveStats, SolverSettings};
+use super::poisson::{CellKind, PoissonSystem, SolveError, SolveStats, SolverSettings};
 use crate::Real;
 
 /// Projects `grid` and returns the solver's statistics. `y` carries the scaled pressure
-/// p dt / (rho dx): the warm start on entry, the solution on exit.
+/// p dt / (rho dx): the warm start on entry, the solution on exit. With `carried`, the scaled
+/// pressure whose gradient the faces already lost this step, `y` is its increment, solved to
+/// the accuracy of the whole (the residual relative to the right-hand side with `carried`'s
+/// gradient put back, |rhs + A carried|).
 pub fn project(
     grid: &mut MacGrid,
     bounds: &Boundaries,
     system: &mut PoissonSystem,
     y: &mut Array3<Real>,
     settings: &SolverSettings,
+    carried: Option<&Array3<Real>>,
 ) -> Result<SolveStats, SolveError> {
     let mut rhs = Array3::zeros(grid.dims);
     grid.net_outflow_scaled(-1.0, &mut rhs);
-    let stats = system.solve(&rhs, y, settings)?;
+    bounds.add_outflow(grid, -1.0, &mut rhs);
+    let reference = carried.map_or(0.0, |c| {
+        let mut whole = Array3::zeros(grid.dims);
+        system.apply(c, &mut whole);
+        whole += &rhs;
+        whole.iter().map(|v| v * v).sum::<Real>().sqrt()
+    });
+    let stats = system.solve_relative_to(&rhs, y, settings, reference)?;
     subtract_gradient(grid, bounds, y);
     grid.sync_periodic();
     Ok(stats)
@@ -32,7 +45,7 @@ pub fn project(
 
 /// u -= y_right - y_left on every face that is not fixed; y is 0 beyond an open side. Row by
 /// row over flat slices: a row of faces along z, and the one or two rows of cells beside it.
-fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) {
+pub(crate) fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) {
     let [n0, n1, n2] = grid.dims;
     let periodic = bounds.periodic();
     let y = y.as_standard_layout();
@@ -86,11 +99,19 @@ fn subtract_gradient(grid: &mut MacGrid, bounds: &Boundaries, y: &Array3<Real>) 
     }
 }
 
-/// Largest |divergence| over the fluid cells, 1/s.
-pub fn max_divergence(grid: &MacGrid, fluid: &Array3<bool>) -> Real {
-    let d = grid.net_outflow();
+/// Largest |divergence| over the cells the projection solves for, 1/s (with cut cells, of
+/// the fluid's share of each: the covered parts of faces move with the obstacle).
+pub fn max_divergence(grid: &MacGrid, bounds: &Boundaries) -> Real {
+    let mut d = grid.net_outflow();
+    bounds.add_outflow(grid, 1.0, &mut d);
     Zip::from(&d)
-        .and(fluid)
-        .fold(0.0, |m: Real, &d, &f| if f { m.max(d.abs()) } else { m })
+        .and(&bounds.cell_kinds())
+        .fold(0.0, |m: Real, &d, &c| {
+            if c == CellKind::Fluid {
+                m.max(d.abs())
+            } else {
+                m
+            }
+        })
         / grid.dx
 }

@@ -13,8 +13,8 @@ use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, confinement};
 use super::mac::MacGrid;
 use super::params::{Advection, GridParams, ViscosityScheme};
-use super::poisson::{CellKind, PoissonSystem, SolveError};
-use super::project::{max_divergence, project};
+use super::poisson::{CellKind, FaceFractions, PoissonSystem, SolveError};
+use super::project::{max_divergence, project, subtract_gradient};
 use super::smoke::SmokeState;
 use super::viscosity::diffuse_component;
 use crate::geometry::{GeometryError, RigidBody};
@@ -90,6 +90,8 @@ pub struct GridSolver {
     /// The cell kinds `system` was built for: a moving obstacle whose cells stay the same
     /// (a sphere spinning about its centre) keeps its hierarchy.
     system_cells: Array3<CellKind>,
+    /// The open fractions `system` was built for (cut cells).
+    system_fractions: Option<FaceFractions>,
     /// Each velocity component's viscosity system of the last step.
     diffusion: [Option<DiffusionSystem>; 3],
     /// p dt / (rho dx) of the last projection: the next solve's warm start.
@@ -128,7 +130,8 @@ impl GridSolver {
         for (a, u) in mac.u.iter_mut().enumerate() {
             u.fill(params.initial_velocity[a]);
         }
-        let bounds = Boundaries::new(&mac, sides, &bodies, 0.0, params.container, None);
+        let surface = (params.container, params.obstacle_surface);
+        let bounds = Boundaries::new(&mac, sides, &bodies, 0.0, surface, None);
         if bounds.fluid_cells() == 0 {
             let body = bodies
                 .first()
@@ -150,7 +153,12 @@ impl GridSolver {
             .map(|s| SmokeState::new(&mac, s, params.smoke_refinement, &bodies, params.container))
             .transpose()?;
         let system_cells = bounds.cell_kinds();
-        let system = PoissonSystem::new(&system_cells, bounds.pressure_boundary());
+        let system_fractions = bounds.face_fractions(mac.dims);
+        let system = PoissonSystem::with_fractions(
+            &system_cells,
+            bounds.pressure_boundary(),
+            system_fractions.clone(),
+        );
         let average = params
             .average_from
             .map(|start| (start, RunningAverage::new(&mac)));
@@ -166,6 +174,7 @@ impl GridSolver {
             average,
             system,
             system_cells,
+            system_fractions,
             diffusion: Default::default(),
             up: up_of(params.gravity),
             ran: Vec::new(),
@@ -201,7 +210,12 @@ impl GridSolver {
             });
         }
         self.bounds.apply(&mut self.mac);
-        self.project(1.0).map(|_| ())
+        self.project(1.0)?;
+        if self.incremental_pressure() {
+            // That projection's potential is no pressure to carry into the next step.
+            self.pressure.fill(0.0);
+        }
+        Ok(())
     }
 
     /// Sets the face velocities (x, y and z faces, of the shapes of `mac.u`), then the boundary
@@ -306,7 +320,7 @@ impl GridSolver {
 
         self.time += dt;
         self.step += 1;
-        stats.max_divergence = max_divergence(&self.mac, &self.bounds.fluid_mask());
+        stats.max_divergence = max_divergence(&self.mac, &self.bounds);
         stats.change_rate = change_rate(&self.before, &self.mac.u) / dt;
         if let Some((start, avg)) = self.average.as_mut() {
             self.ran.push("average");
@@ -356,14 +370,21 @@ impl GridSolver {
             if let Some(smoke) = self.smoke.as_mut() {
                 smoke.place_obstacles(&self.bodies, t, container);
             }
-            Boundaries::new(&self.mac, sides, &self.bodies, t, container, liquid)
+            let surface = (container, self.params.obstacle_surface);
+            Boundaries::new(&self.mac, sides, &self.bodies, t, surface, liquid)
         } else {
             self.bounds.with_liquid(&self.mac, &self.bodies, t, liquid)
         };
         let cells = self.bounds.cell_kinds();
-        if cells != self.system_cells {
-            self.system = PoissonSystem::new(&cells, self.bounds.pressure_boundary());
+        let fractions = self.bounds.face_fractions(self.mac.dims);
+        if cells != self.system_cells || fractions != self.system_fractions {
+            self.system = PoissonSystem::with_fractions(
+                &cells,
+                self.bounds.pressure_boundary(),
+                fractions.clone(),
+            );
             self.system_cells = cells;
+            self.system_fractions = fractions;
         }
     }
 
@@ -554,6 +575,13 @@ impl GridSolver {
                 self.mac.u.clone()
             });
         self.apply_forces(dt);
+        if self.incremental_pressure() {
+            // u -= dt / rho grad p of the last step, as y = p dt / (rho dx) differences.
+            self.scaled_pressure = self
+                .pressure
+                .mapv(|p| p * dt / (self.params.density * self.mac.dx));
+            subtract_gradient(&mut self.mac, &self.bounds, &self.scaled_pressure);
+        }
         self.bounds.apply(&mut self.mac);
         if self.params.viscosity > 0.0 {
             stats.viscosity_iterations = self.diffuse(dt, unforced.as_ref())?;
@@ -689,19 +717,40 @@ impl GridSolver {
         Ok(iterations)
     }
 
-    /// Projects the velocity and stores the pressure of a step of length `dt`.
+    /// Whether a step projects the increment of the pressure only (see
+    /// [`GridParams::incremental_pressure`]): a liquid's cells change from step to step, and a
+    /// pressure carried over would push on the faces it leaves.
+    fn incremental_pressure(&self) -> bool {
+        self.params.incremental_pressure && !self.params.reflection && self.liquid.is_none()
+    }
+
+    /// Projects the velocity and stores the pressure of a step of length `dt`: the solve's, or
+    /// with an incremental pressure the last one plus the solve's increment.
     fn project(&mut self, dt: Real) -> Result<super::poisson::SolveStats, GridError> {
         let to_pressure = self.params.density * self.mac.dx / dt;
-        self.scaled_pressure = self.pressure.mapv(|p| p / to_pressure);
+        let increment = self.incremental_pressure();
+        let carried = increment.then(|| self.pressure.mapv(|p| p / to_pressure));
+        if increment {
+            self.scaled_pressure.fill(0.0);
+        } else {
+            self.scaled_pressure = self.pressure.mapv(|p| p / to_pressure);
+        }
         let stats = project(
             &mut self.mac,
             &self.bounds,
             &mut self.system,
             &mut self.scaled_pressure,
             &self.params.pressure,
+            carried.as_ref(),
         )
         .map_err(|source| self.solve_error("pressure", source))?;
-        self.pressure = self.scaled_pressure.mapv(|y| y * to_pressure);
+        if increment {
+            Zip::from(&mut self.pressure)
+                .and(&self.scaled_pressure)
+                .par_for_each(|p, &y| *p += y * to_pressure);
+        } else {
+            self.pressure = self.scaled_pressure.mapv(|y| y * to_pressure);
+        }
         Ok(stats)
     }
 

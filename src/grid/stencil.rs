@@ -8,10 +8,16 @@
 //! weight: 0 for a no-flux wall, 1 for a ghost cell held at zero, 2 for a mirror ghost (the value
 //! -x_i, a zero-value wall half a cell outside).
 //!
+//! Faces inside the grid may carry a weight other than one ([`Problem::weights`]): the fluid's
+//! share of the face for the pressure of cut cells (Ng, Min & Gibou 2009, Eq. 11), one over the
+//! distance to the wall for the ghost-fluid viscosity (Gibou et al. 2002, Eq. 9). A weighted
+//! face scales the coupling or the Dirichlet term it carries; it keeps the matrix symmetric.
+//!
 //! The fine operator packs two bytes per cell: bit `2 * axis + up` says whether that face couples
 //! two unknowns, bits 6..10 hold the diagonal count (unknown and Dirichlet neighbours plus side
-//! weights, at most 12), bit 10 marks an unknown. Cells with all six faces coupled (most of a
-//! fluid region) take a fast path with no weights at all.
+//! weights, at most 12), bit 10 marks an unknown, bit 11 a cell with a weighted face, whose
+//! weights and diagonal are stored apart. Cells with all six faces coupled at unit weight (most
+//! of a fluid region) take a fast path with no weights at all.
 
 use super::layout::{Layout, RowNeighbours};
 use crate::parallel::ordered_sum;
@@ -25,6 +31,7 @@ pub(crate) const DIRICHLET: u8 = 2;
 const FACES: u16 = 0x3f;
 const COUNT_SHIFT: u32 = 6;
 const FLUID_BIT: u16 = 1 << 10;
+const WEIGHTED_BIT: u16 = 1 << 11;
 
 /// Grids with fewer cells than this are processed on one thread (spawning costs more).
 pub(crate) const PARALLEL_MIN_CELLS: usize = 1 << 14;
@@ -39,6 +46,10 @@ pub(crate) struct Problem {
     pub side_weight: [[u8; 2]; 3],
     pub shift: f64,
     pub scale: f64,
+    /// Weight of the face between each cell and its upper neighbour along each axis, flat C
+    /// order per axis (`None`: every face weighs one). Faces to the ghosts beyond a side weigh
+    /// one whatever is stored.
+    pub weights: Option<[Vec<f32>; 3]>,
 }
 
 impl Problem {
@@ -90,7 +101,14 @@ impl Problem {
         DirichletTable(Some(t))
     }
 
-    /// The packed byte of cell `(i, j, k)` (see the module documentation).
+    /// Weight of the face between cell `lower` and its upper neighbour along `axis`.
+    #[inline]
+    fn weight(&self, axis: usize, lower: usize) -> f32 {
+        self.weights.as_ref().map_or(1.0, |w| w[axis][lower])
+    }
+
+    /// The packed code of cell `(i, j, k)` (see the module documentation) without the weighted
+    /// bit: a face couples two unknowns when its weight is not zero.
     fn code(&self, c: [usize; 3], dirichlet: &DirichletTable) -> u16 {
         let l = &self.layout;
         let idx = l.index(c[0], c[1], c[2]);
@@ -104,7 +122,9 @@ impl Problem {
                 if let Some(s) = l.step(axis, c[axis], up) {
                     let mut nb = c;
                     nb[axis] = s;
-                    if self.kinds[l.index(nb[0], nb[1], nb[2])] == FLUID {
+                    let j = l.index(nb[0], nb[1], nb[2]);
+                    let lower = if up { idx } else { j };
+                    if self.kinds[j] == FLUID && self.weight(axis, lower) > 0.0 {
                         count += 1;
                         bits |= 1 << (2 * axis + usize::from(up));
                     }
@@ -112,6 +132,33 @@ impl Problem {
             }
         }
         FLUID_BIT | (count << COUNT_SHIFT) | bits
+    }
+
+    /// The weighted sum of an unknown's coupled and Dirichlet faces (sides with their weight),
+    /// and whether any of those faces weighs other than one.
+    fn weighted_count(&self, c: [usize; 3]) -> (f64, bool) {
+        let l = &self.layout;
+        let idx = l.index(c[0], c[1], c[2]);
+        let (mut sum, mut weighted) = (0.0, false);
+        for axis in 0..3 {
+            for (side, up) in [false, true].into_iter().enumerate() {
+                match l.step(axis, c[axis], up) {
+                    Some(s) => {
+                        let mut nb = c;
+                        nb[axis] = s;
+                        let j = l.index(nb[0], nb[1], nb[2]);
+                        let w = self.weight(axis, if up { idx } else { j });
+                        if self.kinds[j] != SOLID && w > 0.0 {
+                            sum += f64::from(w);
+                            weighted |= w != 1.0;
+                        }
+                    }
+                    None if !l.periodic[axis] => sum += f64::from(self.side_weight[axis][side]),
+                    None => {}
+                }
+            }
+        }
+        (sum, weighted)
     }
 }
 
@@ -284,14 +331,27 @@ impl Row {
     }
 }
 
-/// The fine operator, one byte per cell, applied in f64 by the outer CG.
+/// The fine operator, two bytes per cell, applied in f64 by the outer CG.
 #[derive(Clone, Debug)]
 pub(crate) struct FineStencil {
     pub layout: Layout,
     code: Vec<u16>,
     pub scale: f64,
-    /// Diagonal by `code >> 3` (unknown bit and count).
+    /// Diagonal by `code >> COUNT_SHIFT` (unknown bit and count).
     diag: [f64; 32],
+    /// The cells with a weighted face, stored apart (empty without [`Problem::weights`]).
+    weighted: Weighted,
+}
+
+/// The weights of a fine operator with weighted faces: per axis the weight of each cell's upper
+/// face where it couples two unknowns (zero elsewhere), and the diagonal of the weighted cells
+/// (f64 for the CG's apply, f32 with its inverse for the smoother).
+#[derive(Clone, Debug, Default)]
+struct Weighted {
+    upper: [Vec<f32>; 3],
+    diag: Vec<f64>,
+    diag32: Vec<f32>,
+    inv32: Vec<f32>,
 }
 
 impl FineStencil {
@@ -314,11 +374,16 @@ impl FineStencil {
         for (count, d) in diag[16..].iter_mut().enumerate() {
             *d = p.shift + p.scale * count as f64;
         }
+        let weighted = p
+            .weights
+            .as_ref()
+            .map_or_else(Weighted::default, |w| Weighted::new(p, w, &mut code));
         Self {
             layout: l,
             code,
             scale: p.scale,
             diag,
+            weighted,
         }
     }
 
@@ -326,9 +391,27 @@ impl FineStencil {
         self.code[idx] & FLUID_BIT != 0
     }
 
-    /// Whether the face of `idx` to its upper neighbour along `axis` couples two unknowns.
-    pub fn upper_face(&self, axis: usize, idx: usize) -> bool {
-        self.code[idx] & (1 << (2 * axis + 1)) != 0
+    /// The weight of the face of `idx` to its upper neighbour along `axis` if it couples two
+    /// unknowns, else 0.
+    pub fn upper_weight(&self, axis: usize, idx: usize) -> f32 {
+        if self.code[idx] & (1 << (2 * axis + 1)) == 0 {
+            0.0
+        } else if self.weighted.upper[axis].is_empty() {
+            1.0
+        } else {
+            self.weighted.upper[axis][idx]
+        }
+    }
+
+    /// The diagonal of cell `c`.
+    #[inline(always)]
+    fn diagonal(&self, c: usize) -> f64 {
+        let code = self.code[c];
+        if code & WEIGHTED_BIT != 0 {
+            self.weighted.diag[c]
+        } else {
+            self.diag[usize::from(code >> COUNT_SHIFT)]
+        }
     }
 
     /// `y = A x`, and returns `x . y` (the CG needs both; fused to read `x` once).
@@ -347,8 +430,7 @@ impl FineStencil {
                     |m| x[m],
                     |k, s: f64| {
                         let c = row.base + k;
-                        let v = self.diag[usize::from(self.code[c] >> COUNT_SHIFT)] * x[c]
-                            - self.scale * s;
+                        let v = self.diagonal(c) * x[c] - self.scale * s;
                         out[k] = v;
                         dot += v * x[c];
                     },
@@ -364,9 +446,50 @@ impl FineStencil {
     }
 }
 
+impl Weighted {
+    /// Marks the weighted cells in `code` and stores their weights and diagonals.
+    fn new(p: &Problem, weights: &[Vec<f32>; 3], code: &mut [u16]) -> Self {
+        let l = p.layout;
+        let upper = std::array::from_fn(|a| {
+            (0..l.len())
+                .map(|c| {
+                    if code[c] & (1 << (2 * a + 1)) != 0 {
+                        weights[a][c]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        });
+        let mut diag = vec![0.0; l.len()];
+        for (c, (code, d)) in code.iter_mut().zip(&mut diag).enumerate() {
+            if *code & FLUID_BIT == 0 {
+                continue;
+            }
+            let (sum, weighted) = p.weighted_count(super::poisson::coordinates(&l, c));
+            if weighted {
+                *code |= WEIGHTED_BIT;
+                *d = p.shift + p.scale * sum;
+            }
+        }
+        let diag32: Vec<f32> = diag.iter().map(|&d| d as f32).collect();
+        let inv32 = diag32
+            .iter()
+            .map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 })
+            .collect();
+        Self {
+            upper,
+            diag,
+            diag32,
+            inv32,
+        }
+    }
+}
+
 /// The fine operator seen by the f32 multigrid smoother.
 pub(crate) struct FineCoefficients<'a> {
     code: &'a [u16],
+    weighted: &'a Weighted,
     scale: f32,
     diag: [f32; 32],
     inv: [f32; 32],
@@ -378,35 +501,50 @@ impl<'a> FineCoefficients<'a> {
         let inv = diag.map(|d| if d > 0.0 { 1.0 / d } else { 0.0 });
         Self {
             code: &s.code,
+            weighted: &s.weighted,
             scale: s.scale as f32,
             diag,
             inv,
         }
     }
 
-    /// Face weights without the scale (0 or 1), for the exact f64 apply.
+    /// Face weights without the scale, for the exact f64 apply.
     fn unscaled(s: &'a FineStencil) -> Self {
         Self {
             code: &s.code,
+            weighted: &s.weighted,
             scale: 1.0,
             diag: [0.0; 32],
             inv: [0.0; 32],
         }
+    }
+
+    #[inline(always)]
+    fn is_weighted(&self, idx: usize) -> bool {
+        self.code[idx] & WEIGHTED_BIT != 0
     }
 }
 
 impl Coefficients for FineCoefficients<'_> {
     #[inline(always)]
     fn upper(&self, axis: usize, idx: usize) -> f32 {
-        f32::from((self.code[idx] >> (2 * axis + 1)) & 1)
+        if self.is_weighted(idx) {
+            self.weighted.upper[axis][idx]
+        } else {
+            f32::from((self.code[idx] >> (2 * axis + 1)) & 1)
+        }
     }
     #[inline(always)]
-    fn lower(&self, axis: usize, idx: usize, _below: usize) -> f32 {
-        f32::from((self.code[idx] >> (2 * axis)) & 1)
+    fn lower(&self, axis: usize, idx: usize, below: usize) -> f32 {
+        if self.is_weighted(idx) {
+            self.weighted.upper[axis][below]
+        } else {
+            f32::from((self.code[idx] >> (2 * axis)) & 1)
+        }
     }
     #[inline(always)]
     fn unit_faces(&self, idx: usize) -> bool {
-        self.code[idx] & FACES == FACES
+        self.code[idx] & (FACES | WEIGHTED_BIT) == FACES
     }
     #[inline(always)]
     fn scale(&self) -> f32 {
@@ -414,11 +552,19 @@ impl Coefficients for FineCoefficients<'_> {
     }
     #[inline(always)]
     fn diagonal(&self, idx: usize) -> f32 {
-        self.diag[usize::from(self.code[idx] >> COUNT_SHIFT)]
+        if self.is_weighted(idx) {
+            self.weighted.diag32[idx]
+        } else {
+            self.diag[usize::from(self.code[idx] >> COUNT_SHIFT)]
+        }
     }
     #[inline(always)]
     fn inv_diagonal(&self, idx: usize) -> f32 {
-        self.inv[usize::from(self.code[idx] >> COUNT_SHIFT)]
+        if self.is_weighted(idx) {
+            self.weighted.inv32[idx]
+        } else {
+            self.inv[usize::from(self.code[idx] >> COUNT_SHIFT)]
+        }
     }
 }
 

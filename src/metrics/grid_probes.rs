@@ -6,7 +6,10 @@ use std::path::Path;
 use super::spec::Probe;
 use crate::io::{CsvSeries, IoError};
 use crate::{Point3, Real, Vec3};
+use nalgebra::{Matrix4, Vector4};
 
+use crate::grid::boundary::cells_near;
+use crate::grid::cut::CutFaces;
 use crate::grid::GridSolver;
 
 /// The force of the fluid on one obstacle, N.
@@ -18,9 +21,15 @@ pub struct Force {
     pub viscous: Vec3,
 }
 
-/// The force of the fluid on obstacle `body` (an index into the solver's bodies), from the
-/// faces between its cells and fluid cells (a staircase surface: first order in dx).
+/// The force of the fluid on obstacle `body` (an index into the solver's bodies): on its cut
+/// surface with cut cells ([`cut_force_on`]), else on the faces between its cells and fluid
+/// cells (a staircase surface: first order in dx).
 pub fn force_on(solver: &GridSolver, body: usize) -> Force {
+    if let Some(faces) = solver.bounds.cut_faces() {
+        if body + faces.bodies() >= solver.bodies.len() {
+            return cut_force_on(solver, faces, body);
+        }
+    }
     let mac = &solver.mac;
     let bounds = &solver.bounds;
     let vel = mac.cell_velocity();
@@ -61,6 +70,63 @@ pub fn force_on(solver: &GridSolver, body: usize) -> Force {
     f
 }
 
+/// How far off the surface the shear's nearer sample lies, in cells. Farther samples miss more
+/// of the profile's curvature: the DFG 2D-1 cylinder's viscous drag at 5, 10 and 20 cells per
+/// diameter read 1.48, 1.88, 2.04 with one cell, 1.18, 1.71, 1.95 with 1.5.
+const WALL_SAMPLE: Real = 1.0;
+
+/// The force on `body` over its cut surface. By the divergence theorem on the fluid's part of
+/// a cell, the surface inside it has the area vector A sum_f open_f n_f (n_f the faces' outward
+/// normals, A = dx^2; zero in a cell the surface does not cross), pointing out of the obstacle;
+/// the pressure force is -sum p A sum_f open_f n_f, exactly what the cut-cell projection's
+/// pressure exerts. The shear comes from the tangential velocity relative to the obstacle at
+/// h and 2 h off the surface along its normal (h = [`WALL_SAMPLE`] cells), as the one-sided
+/// second-order wall gradient (4 u(h) - u(2 h)) / (2 h) with u(0) = 0 (no-slip), exact for a
+/// parabolic profile. A cell counts for the obstacle nearest its centre; `body` is one of the
+/// obstacles that cut cells.
+pub fn cut_force_on(solver: &GridSolver, faces: &CutFaces, body: usize) -> Force {
+    let (mac, t) = (&solver.mac, solver.time());
+    let bodies = &solver.bodies;
+    let area = mac.dx * mac.dx;
+    let mu = solver.density() * solver.viscosity();
+    let h = WALL_SAMPLE * mac.dx;
+    // The obstacles that cut cells are the last ones (a container before them is voxelised).
+    let cutting = bodies.len() - faces.bodies()..bodies.len();
+    let nearest = |x: &Point3| {
+        let distance = |b: &crate::geometry::RigidBody| b.signed_distance(t, x);
+        cutting
+            .clone()
+            .min_by(|&p, &q| distance(&bodies[p]).total_cmp(&distance(&bodies[q])))
+    };
+    let mut f = Force::default();
+    let [rx, ry, rz] = cells_near(mac, &bodies[body], t, mac.dx);
+    for i in rx.clone() {
+        for j in ry.clone() {
+            for k in rz.clone() {
+                let cell = [i, j, k];
+                let mut surface = Vec3::zeros();
+                for a in 0..3 {
+                    let mut upper = cell;
+                    upper[a] += 1;
+                    surface[a] = Real::from(faces.open[a][upper] - faces.open[a][cell]);
+                }
+                let centre = Point3::from(mac.cell_center(cell));
+                if surface != Vec3::zeros() && nearest(&centre) == Some(body) {
+                    f.pressure -= solver.pressure[cell] * area * surface;
+                    let normal = surface.normalize();
+                    let wall = centre - bodies[body].signed_distance(t, &centre) * normal;
+                    let u_body = bodies[body].velocity_at(t, &wall);
+                    let relative = |s: Real| mac.velocity_at(&(wall + s * normal).coords) - u_body;
+                    let gradient = (4.0 * relative(h) - relative(2.0 * h)) / (2.0 * h);
+                    let tangential = gradient - gradient.dot(&normal) * normal;
+                    f.viscous += mu * tangential * area * surface.norm();
+                }
+            }
+        }
+    }
+    f
+}
+
 /// The cell beside `cell` along axis `a` in direction `dir`, wrapping on periodic axes.
 fn neighbour(
     cell: [usize; 3],
@@ -92,45 +158,54 @@ pub fn sample_point(solver: &GridSolver, x: &Vec3) -> (Real, Vec3) {
     )
 }
 
-/// A cell-centred `field` at `x` from the fluid cells only: trilinear in the eight cell centres
-/// around `x` with the solid ones left out and the others' weights renormalised, so a probe on
-/// an obstacle's surface reads the fluid beside it, not a blend with solid cells (whose
-/// pressure is no fluid's: the DFG cylinder's front stagnation point read half its value).
-/// Where all eight are solid, the nearest fluid cell centre within two cells; NaN if none.
+/// A cell-centred `field` at `x` from the cells with a pressure only
+/// ([`crate::grid::Boundaries::has_pressure`]: the fluid cells, and with cut cells the cut ones
+/// too): trilinear in the eight cell centres around `x` where all eight have one; else, as on
+/// or beside an obstacle's surface, the value at `x` of the linear function fitted by weighted
+/// least squares to those cells among the 4 x 4 x 4 around it (weights exp(-(r / dx)^2)), exact
+/// for a linear field such as a hydrostatic pressure. Never a blend with solid cells, whose
+/// pressure is no fluid's (the DFG cylinder's front stagnation point read half its value). NaN
+/// where none of the 64 has a pressure.
 pub fn fluid_sample(solver: &GridSolver, field: &ndarray::Array3<Real>, x: &Vec3) -> Real {
     let (mac, bounds) = (&solver.mac, &solver.bounds);
     let g = mac.grid_coords(x);
-    let (mut sum, mut weight) = (0.0, 0.0);
+    let (mut sum, mut all) = (0.0, true);
     for (cell, w) in mac.cell_stagger().weights(g) {
-        if w > 0.0 && !bounds.is_solid(cell) {
-            sum += w * field[cell];
-            weight += w;
-        }
+        all &= bounds.has_pressure(cell);
+        sum += w * field[cell];
     }
-    if weight > 0.0 {
-        return sum / weight;
+    if all {
+        return sum;
     }
-    let at = g.map(|c| (c - 0.5).round() as isize);
-    let mut nearest: Option<(Real, [usize; 3])> = None;
-    for di in -2..=2isize {
-        for dj in -2..=2isize {
-            for dk in -2..=2isize {
-                let c = [at[0] + di, at[1] + dj, at[2] + dk];
+    let base = g.map(|c| (c - 0.5).floor() as isize);
+    let (mut normal, mut rhs) = (Matrix4::<Real>::zeros(), Vector4::<Real>::zeros());
+    for di in -1..=2isize {
+        for dj in -1..=2isize {
+            for dk in -1..=2isize {
+                let c = [base[0] + di, base[1] + dj, base[2] + dk];
                 if (0..3).any(|a| !(0..mac.dims[a] as isize).contains(&c[a])) {
                     continue;
                 }
                 let cell = c.map(|v| v as usize);
-                if bounds.is_solid(cell) {
+                if !bounds.has_pressure(cell) {
                     continue;
                 }
-                let d = (mac.cell_center(cell) - x).norm();
-                if nearest.is_none_or(|(best, _)| d < best) {
-                    nearest = Some((d, cell));
-                }
+                let d = (mac.cell_center(cell) - x) / mac.dx;
+                let row = Vector4::new(1.0, d.x, d.y, d.z);
+                let w = (-d.norm_squared()).exp();
+                normal += w * row * row.transpose();
+                rhs += w * field[cell] * row;
             }
         }
     }
-    nearest.map_or(Real::NAN, |(_, cell)| field[cell])
+    if normal[(0, 0)] == 0.0 {
+        return Real::NAN;
+    }
+    // A flat layer of cells (a 2-D run) leaves a direction undetermined: the least-norm fit.
+    normal
+        .svd(true, true)
+        .solve(&rhs, 1e-12 * normal[(0, 0)])
+        .map_or(Real::NAN, |beta| beta[0])
 }
 
 /// The velocity at `x` with the domain's walls as boundary conditions: a tangential component's

@@ -82,6 +82,8 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
             .map(|t| InflowModes::new(t, scene.seed)),
         advection: grid.advection,
         reflection: grid.reflection,
+        obstacle_surface: grid.obstacle_surface,
+        incremental_pressure: grid.incremental_pressure,
         viscosity_scheme: grid.viscosity_scheme,
         viscosity: scene.viscosity.kinematic,
         density: scene

@@ -16,7 +16,8 @@ pub use crate::refine::Refinement;
 pub use coupling::Coupling;
 pub use error::{Number, SceneError};
 pub use grid::{
-    Advection, Grid, GridBoundary, GridSide, InitialFlow, Smoke, SmokeSource, ViscosityScheme,
+    Advection, Grid, GridBoundary, GridSide, InitialFlow, ObstacleSurface, Smoke, SmokeSource,
+    ViscosityScheme,
 };
 pub use load::{load, parse_str};
 pub use overrides::apply_override;

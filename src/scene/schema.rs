@@ -171,7 +171,7 @@ pub struct Output {
     pub metrics: Vec<Metric>,
 }
 
-fn default_true() -> bool {
+pub(super) fn default_true() -> bool {
     true
 }
 fn default_compression() -> u8 {

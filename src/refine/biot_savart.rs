@@ -36,7 +36,6 @@ use super::clusters::{bounds, Clusters};
 use crate::simd::{self, Level};
 use crate::Mat3;
 use crate::{Real, Vec3};
-use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -99,14 +98,15 @@ impl Lanes {
 }
 
 /// sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2) over `sources`, without the 1 / (4 pi),
-/// at each of `targets` (relative to the sources' origin) into `out`, divided by 4 pi.
+/// at each of `targets` (`origin` the sources' origin), added to `out` divided by 4 pi.
 ///
 /// This loop is the sums' whole near-field cost, so it runs in f32 (twice the SIMD lanes of
 /// f64) with positions relative to a nearby origin; the lanes are added up in f64. The
 /// relative accuracy, about 1e-6, is far below the Monte Carlo error.
 struct NearSum<'a> {
     sources: &'a Lanes,
-    targets: &'a [Vector3<f32>],
+    origin: Vec3,
+    targets: &'a [Vec3],
     d2: f32,
     out: &'a mut [Vec3],
 }
@@ -119,6 +119,7 @@ impl WithSimd for NearSum<'_> {
         let splat = |v: f32| simd.splat_f32s(v);
         let d2 = splat(self.d2);
         for (u, p) in self.out.iter_mut().zip(self.targets) {
+            let p = (p - self.origin).cast::<f32>();
             let (px, py, pz) = (splat(p.x), splat(p.y), splat(p.z));
             let (mut ux, mut uy, mut uz) = (splat(0.0), splat(0.0), splat(0.0));
             for b in &self.sources.blocks {
@@ -163,10 +164,10 @@ pub fn biot_savart(targets: &[Vec3], sources: &[Vec3], beta: &[Vec3], core: Real
     out.par_chunks_mut(256)
         .zip(targets.par_chunks(256))
         .for_each(|(out, targets)| {
-            let targets: Vec<_> = targets.iter().map(|p| (p - origin).cast()).collect();
             level.run(NearSum {
                 sources: &lanes,
-                targets: &targets,
+                origin,
+                targets,
                 d2,
                 out,
             })
@@ -375,10 +376,10 @@ impl BiotSavartTree {
                     near.push(self.x[k] - origin, self.beta[k]);
                 }
             }
-            let targets: Vec<_> = targets.iter().map(|p| (p - origin).cast()).collect();
             Level::active().run(NearSum {
                 sources: &near,
-                targets: &targets,
+                origin,
+                targets,
                 d2: (self.core * self.core) as f32,
                 out,
             });
@@ -589,9 +590,9 @@ mod tests {
         let d2 = 1e-3;
         let run = |level: Level| {
             let mut out = vec![Vec3::zeros(); targets.len()];
-            let targets: Vec<_> = targets.iter().map(|p| p.cast()).collect();
             level.run(NearSum {
                 sources: &lanes,
+                origin: Vec3::zeros(),
                 targets: &targets,
                 d2,
                 out: &mut out,

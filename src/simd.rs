@@ -126,13 +126,14 @@ pub fn bits<S: Simd>(m: S::m64s) -> u32 {
         // AVX-512: the mask register itself.
         return u32::from(*b);
     }
-    // Elsewhere a vector of all-ones or all-zeros lanes.
-    let width = bytes.len() / LANES;
+    // Elsewhere a vector of all-ones or all-zeros u64 lanes: each keeps its own bit, and an
+    // OR across the vector joins them.
+    let lanes: [u64; LANES] = pulp::bytemuck::pod_read_unaligned(bytes);
     let mut out = 0;
-    for l in 0..LANES {
-        out |= u32::from(bytes[l * width] & 1) << l;
+    for (l, lane) in lanes.iter().enumerate() {
+        out |= lane & (1 << l);
     }
-    out
+    out as u32
 }
 
 /// u32 lanes of a kernel's vectors (sixteen in 512 bits).

@@ -97,8 +97,8 @@ impl Lanes {
     }
 }
 
-/// sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2) over `sources`, without the 1 / (4 pi),
-/// at each of `targets` (`origin` the sources' origin), added to `out` divided by 4 pi.
+/// u(p) = sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2) / (4 pi) over `sources`, at each of
+/// `targets` (`origin` the sources' origin), added to `out`.
 ///
 /// This loop is the sums' whole near-field cost, so it runs in f32 (twice the SIMD lanes of
 /// f64) with positions relative to a nearby origin; the lanes are added up in f64. The
@@ -137,7 +137,7 @@ impl WithSimd for NearSum<'_> {
                 let inv = simd.div_f32s(splat(1.0), simd.mul_f32s(r2, simd.sqrt_f32s(r2)));
                 let (bx, by, bz) = (load(&b.bx), load(&b.by), load(&b.bz));
                 let cross =
-                    |b1, d2, b2, d1| simd.sub_f32s(simd.mul_f32s(b1, d2), simd.mul_f32s(b2, d1));
+                    |p1, q2, p2, q1| simd.sub_f32s(simd.mul_f32s(p1, q2), simd.mul_f32s(p2, q1));
                 ux = simd.add_f32s(ux, simd.mul_f32s(cross(by, dz, bz, dy), inv));
                 uy = simd.add_f32s(uy, simd.mul_f32s(cross(bz, dx, bx, dz), inv));
                 uz = simd.add_f32s(uz, simd.mul_f32s(cross(bx, dy, by, dx), inv));

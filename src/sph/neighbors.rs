@@ -50,6 +50,7 @@ impl NeighborLists {
         radius: Real,
         exclude_self: bool,
     ) -> Self {
+        debug_assert!(radius <= query_grid.cell * (1.0 + 1e-12));
         let search = Search {
             queries,
             query_grid,
@@ -58,7 +59,6 @@ impl NeighborLists {
             r2: radius * radius,
             exclude_self,
         };
-        debug_assert!(radius <= query_grid.cell * (1.0 + 1e-12));
         search.run(Level::active())
     }
 

@@ -136,19 +136,17 @@ pub fn bits<S: Simd>(m: S::m64s) -> u32 {
     out as u32
 }
 
-/// u32 lanes of a kernel's vectors (sixteen in 512 bits).
-pub const U32_LANES: usize = 2 * LANES;
-
 /// For every mask of [`LANES`] bits, the lanes of its set bits in increasing order, then
-/// zeros, as a vector of u32: the offsets that pack a vector's selected lanes to its front.
-static PACK: [[u32; U32_LANES]; 1 << LANES] = {
-    let mut table = [[0; U32_LANES]; 1 << LANES];
+/// zeros, two u32 to a u64 (the first in the low half): the offsets that pack a vector's
+/// selected lanes to its front.
+static PACK: [[u64; LANES / 2]; 1 << LANES] = {
+    let mut table = [[0; LANES / 2]; 1 << LANES];
     let mut m = 0;
     while m < table.len() {
         let (mut l, mut n) = (0, 0);
         while l < LANES {
             if m >> l & 1 == 1 {
-                table[m][n] = l as u32;
+                table[m][n / 2] |= (l as u64) << (32 * (n % 2));
                 n += 1;
             }
             l += 1;
@@ -160,11 +158,15 @@ static PACK: [[u32; U32_LANES]; 1 << LANES] = {
 
 /// Writes `first + l` for every set lane l of `bits` (as from [`bits`]) to the front of `out`,
 /// in increasing order, and returns how many; the entries past the count are overwritten with
-/// junk. One table row added to `first` and stored whole, without a branch.
+/// junk. A table row added to `first` in both halves of four u64, without a branch.
 #[inline(always)]
-pub fn pack_indices<S: Simd>(simd: S, bits: u32, first: u32, out: &mut [u32; U32_LANES]) -> usize {
-    let offsets: S::u32s = pulp::cast(PACK[(bits & 0xff) as usize]);
-    *out = pulp::cast(simd.add_u32s(offsets, simd.splat_u32s(first)));
+pub fn pack_indices(bits: u32, first: u32, out: &mut [u32; LANES]) -> usize {
+    let both = u64::from(first) * 0x1_0000_0001;
+    for (pair, &offsets) in out.chunks_exact_mut(2).zip(&PACK[(bits & 0xff) as usize]) {
+        let v = offsets + both;
+        pair[0] = v as u32;
+        pair[1] = (v >> 32) as u32;
+    }
     bits.count_ones() as usize
 }
 
@@ -213,13 +215,13 @@ mod tests {
     }
 
     /// A kernel that packs the lanes of a mask, from 100 on.
-    struct Pack<'a>(u32, &'a mut [u32; U32_LANES]);
+    struct Pack<'a>(u32, &'a mut [u32; LANES]);
 
     impl WithSimd for Pack<'_> {
         type Output = usize;
         #[inline(always)]
-        fn with_simd<S: Simd>(self, simd: S) -> usize {
-            pack_indices(simd, self.0, 100, self.1)
+        fn with_simd<S: Simd>(self, _: S) -> usize {
+            pack_indices(self.0, 100, self.1)
         }
     }
 
@@ -235,7 +237,7 @@ mod tests {
                     m,
                     "{level:?}, mask {m:#b}"
                 );
-                let mut out = [0; U32_LANES];
+                let mut out = [0; LANES];
                 let n = level.run(Pack(m, &mut out));
                 let want: Vec<u32> = (0..LANES as u32)
                     .filter(|l| m >> l & 1 == 1)

@@ -1,7 +1,7 @@
 //! Neighbour search on the compact hashed uniform grid of [`crate::spatial`]: neighbour lists
 //! built in parallel, cell chunk by cell chunk, into one compressed-row (CSR) array of `u32`.
 
-use crate::simd::{bits, pack_indices, Level, LANES, U32_LANES};
+use crate::simd::{bits, pack_indices, Level, LANES};
 use crate::spatial::Cell;
 pub use crate::spatial::{cell_order, cell_order_and_codes, permute, resize, CellGrid};
 use crate::{Real, Vec3};
@@ -147,7 +147,7 @@ impl WithSimd for Chunk<'_> {
             }
             merge_adjacent(&mut ranges);
             let candidates: usize = ranges.iter().map(|&(s, e)| (e - s) as usize).sum();
-            found.resize((candidates + U32_LANES).max(found.len()), 0);
+            found.resize((candidates + LANES).max(found.len()), 0);
             for i in c.start..c.end {
                 let skip = if s.exclude_self { i } else { u32::MAX };
                 let xi = s.queries[i as usize];
@@ -201,7 +201,7 @@ fn merge_adjacent(ranges: &mut Vec<(u32, u32)>) {
 
 /// The distance test of the search: the points of `ranges` closer than sqrt(`r2`) to `xi`,
 /// except the index `skip`, written in index order to the front of `found` (at least
-/// [`U32_LANES`] longer than the ranges hold); returns how many.
+/// [`LANES`] longer than the ranges hold); returns how many.
 ///
 /// [`LANES`] candidates at a time: |x_i - x_j|^2 in one vector (the same f64 operations, no
 /// fused multiply-add, at every level, so every level finds the same neighbours), the test as
@@ -252,8 +252,8 @@ fn near<S: Simd>(
             let from_skip = skip.wrapping_sub(k);
             let not_skip = !(u32::from(from_skip < LANES as u32) << (from_skip % LANES as u32));
             let near = bits::<S>(simd.less_than_f64s(d2, r2)) & valid & not_skip;
-            let out = (&mut found[n..n + U32_LANES]).try_into().unwrap();
-            n += pack_indices(simd, near, k, out);
+            let out = (&mut found[n..n + LANES]).try_into().unwrap();
+            n += pack_indices(near, k, out);
         }
     }
     n

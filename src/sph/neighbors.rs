@@ -224,6 +224,11 @@ fn near<S: Simd>(
         simd.splat_f64s(xi.z),
     );
     let r2 = simd.splat_f64s(r2);
+    // Candidate indices as f64 lanes (exact below 2^53), tested against the range's end and
+    // `skip` in vector compares.
+    let lane: [Real; LANES] = std::array::from_fn(|l| l as Real);
+    let (lane, step) = (pulp::cast(lane), simd.splat_f64s(LANES as Real));
+    let skip = simd.splat_f64s(Real::from(skip));
     let mut n = 0;
     for &(s, e) in ranges {
         // The range's candidates in whole vectors: the last one reads past `e` into the next
@@ -235,6 +240,8 @@ fn near<S: Simd>(
             S::as_simd_f64s(y).0,
             S::as_simd_f64s(z).0,
         );
+        let end = simd.splat_f64s(Real::from(e));
+        let mut index = simd.add_f64s(simd.splat_f64s(s as Real), lane);
         let vectors = x.iter().zip(y).zip(z);
         for (((&x, &y), &z), k) in vectors.zip((s as u32..).step_by(LANES)) {
             let (dx, dy, dz) = (
@@ -246,14 +253,15 @@ fn near<S: Simd>(
                 simd.add_f64s(simd.mul_f64s(dx, dx), simd.mul_f64s(dy, dy)),
                 simd.mul_f64s(dz, dz),
             );
-            // The lanes below `e`, and not `skip` (computed without a branch: an if/else here
-            // made the search in the dam-break step 1.7 times slower).
-            let valid = (1u32 << (e - k).min(LANES as u32)) - 1;
-            let from_skip = skip.wrapping_sub(k);
-            let not_skip = !(u32::from(from_skip < LANES as u32) << (from_skip % LANES as u32));
-            let near = bits::<S>(simd.less_than_f64s(d2, r2)) & valid & not_skip;
+            // Within the radius, below `e` and not `skip`, without a branch (an if/else for
+            // the range's last vector made the search in the dam-break step 1.7 times slower).
+            let near = simd.and_m64s(
+                simd.and_m64s(simd.less_than_f64s(d2, r2), simd.less_than_f64s(index, end)),
+                simd.not_m64s(simd.equal_f64s(index, skip)),
+            );
+            index = simd.add_f64s(index, step);
             let out = (&mut found[n..n + LANES]).try_into().unwrap();
-            n += pack_indices(near, k, out);
+            n += pack_indices(bits::<S>(near), k, out);
         }
     }
     n

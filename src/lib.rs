@@ -11,7 +11,8 @@
 //! - [`vortex`]: the vortex-particle layer, which reads and writes solvers through two traits;
 //!   [`abl`]: the artificial-boundary-layer database and lookup.
 //! - [`geometry`] (bodies and motion), [`spatial`] (the hashed cell grid), [`stepping`] (step
-//!   limits), [`parallel`] (fixed-order sums): shared by the parts above.
+//!   limits), [`parallel`] (fixed-order sums), [`simd`] (vector kernels dispatched to the
+//!   CPU's widest instruction set): shared by the parts above.
 //! - [`metrics`] (diagnostics and probes), [`io`] (VTK, HDF5, CSV, plots), [`bench`] (the
 //!   benchmark tables behind `eddy bench` and `eddy bench-grid`).
 
@@ -25,6 +26,7 @@ pub mod parallel;
 pub mod pipeline;
 pub mod refine;
 pub mod scene;
+pub mod simd;
 pub mod spatial;
 pub mod sph;
 pub mod stepping;

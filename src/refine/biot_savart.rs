@@ -25,17 +25,18 @@
 //!   evaluations per target stay few. A cluster's far field is handed down to its
 //!   sub-clusters as its values at their corners (restricting a trilinear field to a sub-box
 //!   is exact), so each target is interpolated once, at the level where its descent ends.
-//! - both inner loops (near sources per target, far nodes per eight corners) run in f32
-//!   lanes, on AVX2 and FMA where the CPU has them (module `simd`); at 91k fluid particles
-//!   and 911 vortex particles the near field is about half the work.
+//! - both inner loops (near sources per target, far nodes per eight corners) run in vectors
+//!   of sixteen f32 at the CPU's widest level ([`crate::simd`]); at 91k fluid particles and
+//!   911 vortex particles the near field is about half the work.
 //!
 //! The error is O(theta^2) relative to each far node's contribution and vanishes as
 //! theta -> 0 (at theta = 0 every pair is direct); `tests/refine_operators.rs` checks both.
 
 use super::clusters::{bounds, Clusters};
+use crate::simd::{self, Level};
 use crate::Mat3;
 use crate::{Real, Vec3};
-use nalgebra::Vector3;
+use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -54,8 +55,9 @@ const LEAF: usize = 4;
 /// Octree depth beyond which a node stays a leaf (coincident sources).
 const MAX_DEPTH: usize = 40;
 
-/// f32 lanes of the direct sum (independent partial sums the compiler can vectorise).
-const LANES: usize = 8;
+/// f32 lanes of a vector: sources per block of the direct sum, two nodes' eight corners in the
+/// far field.
+const LANES: usize = 2 * simd::LANES;
 
 /// [`LANES`] sources in f32, structure of arrays: positions and strengths.
 #[derive(Default, Clone, Copy)]
@@ -93,37 +95,59 @@ impl Lanes {
         }
         self.len += 1;
     }
+}
 
-    /// sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2), without the 1 / (4 pi).
-    ///
-    /// This loop is the sums' whole near-field cost, so it runs in f32 (twice the SIMD lanes
-    /// of f64) with positions relative to a nearby origin, and on 256-bit vectors where the
-    /// CPU has them; the lanes are added up in f64. The relative accuracy, about 1e-6, is far
-    /// below the Monte Carlo error.
-    fn sum_at(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
-        #[cfg(target_arch = "x86_64")]
-        if simd::available() {
-            // SAFETY: the CPU has AVX2 and FMA, checked just above.
-            return unsafe { simd::sum_at(&self.blocks, p, d2) };
-        }
-        self.sum_lanes(p, d2)
-    }
+/// u(p) = sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2) / (4 pi) over `sources`, at each of
+/// `targets` (`origin` the sources' origin), added to `out`.
+///
+/// This loop is the sums' whole near-field cost, so it runs in f32 (twice the SIMD lanes of
+/// f64) with positions relative to a nearby origin; the lanes are added up in f64. The
+/// relative accuracy, about 1e-6, is far below the Monte Carlo error.
+struct NearSum<'a> {
+    sources: &'a Lanes,
+    origin: Vec3,
+    targets: &'a [Vec3],
+    d2: f32,
+    out: &'a mut [Vec3],
+}
 
-    /// The portable body of [`Self::sum_at`].
-    fn sum_lanes(&self, p: Vector3<f32>, d2: f32) -> Vec3 {
-        let (mut ux, mut uy, mut uz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
-        for b in &self.blocks {
-            for l in 0..LANES {
-                let (dx, dy, dz) = (p.x - b.x[l], p.y - b.y[l], p.z - b.z[l]);
-                let r2 = dx * dx + dy * dy + dz * dz + d2;
-                let inv = 1.0 / (r2 * r2.sqrt());
-                ux[l] += (b.by[l] * dz - b.bz[l] * dy) * inv;
-                uy[l] += (b.bz[l] * dx - b.bx[l] * dz) * inv;
-                uz[l] += (b.bx[l] * dy - b.by[l] * dx) * inv;
+impl WithSimd for NearSum<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let splat = |v: f32| simd.splat_f32s(v);
+        let d2 = splat(self.d2);
+        for (u, p) in self.out.iter_mut().zip(self.targets) {
+            let p = (p - self.origin).cast::<f32>();
+            let (px, py, pz) = (splat(p.x), splat(p.y), splat(p.z));
+            let (mut ux, mut uy, mut uz) = (splat(0.0), splat(0.0), splat(0.0));
+            for b in &self.sources.blocks {
+                let load = |a: &[f32; LANES]| -> S::f32s { pulp::cast(*a) };
+                let dx = simd.sub_f32s(px, load(&b.x));
+                let dy = simd.sub_f32s(py, load(&b.y));
+                let dz = simd.sub_f32s(pz, load(&b.z));
+                let r2 = simd.add_f32s(
+                    simd.add_f32s(
+                        simd.add_f32s(simd.mul_f32s(dx, dx), simd.mul_f32s(dy, dy)),
+                        simd.mul_f32s(dz, dz),
+                    ),
+                    d2,
+                );
+                let inv = simd.div_f32s(splat(1.0), simd.mul_f32s(r2, simd.sqrt_f32s(r2)));
+                let (bx, by, bz) = (load(&b.bx), load(&b.by), load(&b.bz));
+                let cross =
+                    |p1, q2, p2, q1| simd.sub_f32s(simd.mul_f32s(p1, q2), simd.mul_f32s(p2, q1));
+                ux = simd.add_f32s(ux, simd.mul_f32s(cross(by, dz, bz, dy), inv));
+                uy = simd.add_f32s(uy, simd.mul_f32s(cross(bz, dx, bx, dz), inv));
+                uz = simd.add_f32s(uz, simd.mul_f32s(cross(bx, dy, by, dx), inv));
             }
+            let sum = |v: S::f32s| {
+                let lanes: [f32; LANES] = pulp::cast(v);
+                lanes.iter().map(|&x| Real::from(x)).sum::<Real>()
+            };
+            *u += Vec3::new(sum(ux), sum(uy), sum(uz)) / (4.0 * PI);
         }
-        let sum = |a: [f32; LANES]| a.iter().map(|&x| Real::from(x)).sum::<Real>();
-        Vec3::new(sum(ux), sum(uy), sum(uz))
     }
 }
 
@@ -134,11 +158,21 @@ pub fn biot_savart(targets: &[Vec3], sources: &[Vec3], beta: &[Vec3], core: Real
     for (x, b) in sources.iter().zip(beta) {
         lanes.push(x - origin, *b);
     }
+    let level = Level::active();
     let d2 = (core * core) as f32;
-    targets
-        .par_iter()
-        .map(|p| lanes.sum_at((p - origin).cast::<f32>(), d2) / (4.0 * PI))
-        .collect()
+    let mut out = vec![Vec3::zeros(); targets.len()];
+    out.par_chunks_mut(256)
+        .zip(targets.par_chunks(256))
+        .for_each(|(out, targets)| {
+            level.run(NearSum {
+                sources: &lanes,
+                origin,
+                targets,
+                d2,
+                out,
+            })
+        });
+    out
 }
 
 /// One octree node: its sources (a range of the tree's sorted sources), children and moments.
@@ -342,10 +376,13 @@ impl BiotSavartTree {
                     near.push(self.x[k] - origin, self.beta[k]);
                 }
             }
-            let d2 = (self.core * self.core) as f32;
-            for (u, p) in out.iter_mut().zip(targets) {
-                *u += near.sum_at((p - origin).cast::<f32>(), d2) / (4.0 * PI);
-            }
+            Level::active().run(NearSum {
+                sources: &near,
+                origin,
+                targets,
+                d2: (self.core * self.core) as f32,
+                out,
+            });
         } else if !rest.is_empty() {
             // The sub-clusters cover the cluster's targets in order.
             let mut parts = Vec::with_capacity(cluster.children.len());
@@ -363,189 +400,120 @@ impl BiotSavartTree {
 
     /// The far field of the `far` nodes at the eight corners `origin +- half` of a box
     /// (corner c has bit a set for the upper side along axis a).
-    ///
-    /// These evaluations are most of the treecode's far-field cost, so the eight corners run
-    /// as eight f32 lanes (on AVX2 where the CPU has it), positions relative to the box
-    /// centre; relative accuracy about 1e-6, like the near field.
     fn far_at_corners(&self, far: &[usize], origin: Vec3, half: Vec3) -> [Vec3; 8] {
-        #[cfg(target_arch = "x86_64")]
-        if simd::available() {
-            // SAFETY: the CPU has AVX2 and FMA, checked just above.
-            return unsafe { simd::far_at_corners(self, far, origin, half) };
-        }
-        self.far_corner_lanes(far, origin, half)
-    }
-
-    /// The portable body of [`Self::far_at_corners`]: with y = x - c and
-    /// s^2 = |y|^2 + d^2, u = (B x y - a) / s^3 + 3 (M y) x y / s^5 (module documentation).
-    fn far_corner_lanes(&self, far: &[usize], origin: Vec3, half: Vec3) -> [Vec3; 8] {
-        let side = |c: usize, axis: usize| {
-            let h = half[axis] as f32;
-            if c >> axis & 1 == 1 {
-                h
-            } else {
-                -h
-            }
-        };
-        let cx: [f32; 8] = std::array::from_fn(|c| side(c, 0));
-        let cy: [f32; 8] = std::array::from_fn(|c| side(c, 1));
-        let cz: [f32; 8] = std::array::from_fn(|c| side(c, 2));
-        let d2 = (self.core * self.core) as f32;
-        let (mut ux, mut uy, mut uz) = ([0f32; 8], [0f32; 8], [0f32; 8]);
-        for &n in far {
-            let node = &self.nodes[n];
-            let c = (node.centre - origin).cast::<f32>();
-            let Moments {
-                total: b,
-                twist: a,
-                moment: m,
-            } = node.moments;
-            for l in 0..8 {
-                let (yx, yy, yz) = (cx[l] - c.x, cy[l] - c.y, cz[l] - c.z);
-                let s2 = yx * yx + yy * yy + yz * yz + d2;
-                let inv3 = 1.0 / (s2 * s2.sqrt());
-                let inv5 = 3.0 * inv3 / s2;
-                let mx = m[0] * yx + m[1] * yy + m[2] * yz;
-                let my = m[3] * yx + m[4] * yy + m[5] * yz;
-                let mz = m[6] * yx + m[7] * yy + m[8] * yz;
-                ux[l] += (b[1] * yz - b[2] * yy - a[0]) * inv3 + (my * yz - mz * yy) * inv5;
-                uy[l] += (b[2] * yx - b[0] * yz - a[1]) * inv3 + (mz * yx - mx * yz) * inv5;
-                uz[l] += (b[0] * yy - b[1] * yx - a[2]) * inv3 + (mx * yy - my * yx) * inv5;
-            }
-        }
-        std::array::from_fn(|c| {
-            Vec3::new(Real::from(ux[c]), Real::from(uy[c]), Real::from(uz[c])) / (4.0 * PI)
+        Level::active().run(FarAtCorners {
+            tree: self,
+            far,
+            origin,
+            half,
         })
     }
 }
 
-/// The two inner loops on AVX2 and FMA: eight f32 lanes, and 1 / s^3 from the reciprocal
-/// square root estimate refined by one Newton step (relative error about 1e-7, like f32
-/// rounding) instead of a square root and a division, which would take most of the time.
-#[cfg(target_arch = "x86_64")]
-mod simd {
-    use super::{BiotSavartTree, Block, Moments, Real, Vec3, PI};
-    use nalgebra::Vector3;
-    use std::arch::x86_64::*;
+/// [`BiotSavartTree::far_at_corners`]: with y = x - c and s^2 = |y|^2 + d^2,
+/// u = (B x y - a) / s^3 + 3 (M y) x y / s^5 (module documentation).
+///
+/// These evaluations are most of the treecode's far-field cost, so they run in f32, two nodes
+/// a vector: the eight corners of one node in the lower lanes, of the next in the upper ones
+/// (an odd last node pairs with a node of zero moments), positions relative to the box centre;
+/// relative accuracy about 1e-6, like the near field.
+struct FarAtCorners<'a> {
+    tree: &'a BiotSavartTree,
+    far: &'a [usize],
+    origin: Vec3,
+    half: Vec3,
+}
 
-    /// Whether the CPU runs [`sum_at`] and [`far_at_corners`].
-    pub fn available() -> bool {
-        is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
-    }
+impl WithSimd for FarAtCorners<'_> {
+    type Output = [Vec3; 8];
 
-    /// 1 / sqrt(r2), lane by lane: the hardware estimate (12 bits) and one Newton step.
     #[inline(always)]
-    unsafe fn rsqrt(r2: __m256) -> __m256 {
-        let y = _mm256_rsqrt_ps(r2);
-        let half_r2 = _mm256_mul_ps(_mm256_set1_ps(0.5), r2);
-        let correction = _mm256_fnmadd_ps(half_r2, _mm256_mul_ps(y, y), _mm256_set1_ps(1.5));
-        _mm256_mul_ps(y, correction)
-    }
-
-    /// The eight lanes of `v` added up in f64.
-    #[inline(always)]
-    unsafe fn total(v: __m256) -> Real {
-        let mut lanes = [0f32; 8];
-        _mm256_storeu_ps(lanes.as_mut_ptr(), v);
-        lanes.iter().map(|&x| Real::from(x)).sum()
-    }
-
-    /// `Lanes::sum_at`: sum_k b_k x (p - x_k) / (|p - x_k|^2 + d2)^(3/2).
-    #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn sum_at(blocks: &[Block], p: Vector3<f32>, d2: f32) -> Vec3 {
-        let (px, py, pz) = (
-            _mm256_set1_ps(p.x),
-            _mm256_set1_ps(p.y),
-            _mm256_set1_ps(p.z),
-        );
-        let d2 = _mm256_set1_ps(d2);
-        let (mut ux, mut uy, mut uz) = (
-            _mm256_setzero_ps(),
-            _mm256_setzero_ps(),
-            _mm256_setzero_ps(),
-        );
-        for b in blocks {
-            let dx = _mm256_sub_ps(px, _mm256_loadu_ps(b.x.as_ptr()));
-            let dy = _mm256_sub_ps(py, _mm256_loadu_ps(b.y.as_ptr()));
-            let dz = _mm256_sub_ps(pz, _mm256_loadu_ps(b.z.as_ptr()));
-            let r2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_fmadd_ps(dz, dz, d2)));
-            let y = rsqrt(r2);
-            let inv = _mm256_mul_ps(y, _mm256_mul_ps(y, y));
-            let bx = _mm256_loadu_ps(b.bx.as_ptr());
-            let by = _mm256_loadu_ps(b.by.as_ptr());
-            let bz = _mm256_loadu_ps(b.bz.as_ptr());
-            ux = _mm256_fmadd_ps(_mm256_fmsub_ps(by, dz, _mm256_mul_ps(bz, dy)), inv, ux);
-            uy = _mm256_fmadd_ps(_mm256_fmsub_ps(bz, dx, _mm256_mul_ps(bx, dz)), inv, uy);
-            uz = _mm256_fmadd_ps(_mm256_fmsub_ps(bx, dy, _mm256_mul_ps(by, dx)), inv, uz);
-        }
-        Vec3::new(total(ux), total(uy), total(uz))
-    }
-
-    /// `BiotSavartTree::far_at_corners`, one corner per lane.
-    #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn far_at_corners(
-        tree: &BiotSavartTree,
-        far: &[usize],
-        origin: Vec3,
-        half: Vec3,
-    ) -> [Vec3; 8] {
-        let side = |axis: usize| {
-            let h = half[axis] as f32;
-            let lanes: [f32; 8] = std::array::from_fn(|c| if c >> axis & 1 == 1 { h } else { -h });
-            _mm256_loadu_ps(lanes.as_ptr())
+    fn with_simd<S: Simd>(self, simd: S) -> [Vec3; 8] {
+        const CORNERS: usize = 8;
+        let side = |axis: usize| -> S::f32s {
+            let h = self.half[axis] as f32;
+            let lanes: [f32; LANES] = std::array::from_fn(|l| {
+                if (l % CORNERS) >> axis & 1 == 1 {
+                    h
+                } else {
+                    -h
+                }
+            });
+            pulp::cast(lanes)
         };
         let (cx, cy, cz) = (side(0), side(1), side(2));
-        let d2 = _mm256_set1_ps((tree.core * tree.core) as f32);
+        let d2 = simd.splat_f32s((self.tree.core * self.tree.core) as f32);
         let (mut ux, mut uy, mut uz) = (
-            _mm256_setzero_ps(),
-            _mm256_setzero_ps(),
-            _mm256_setzero_ps(),
+            simd.splat_f32s(0.0),
+            simd.splat_f32s(0.0),
+            simd.splat_f32s(0.0),
         );
-        for &n in far {
-            let node = &tree.nodes[n];
-            let c = (node.centre - origin).cast::<f32>();
-            let Moments {
-                total: b,
-                twist: a,
-                moment: m,
-            } = node.moments;
-            let s = _mm256_set1_ps;
-            let yx = _mm256_sub_ps(cx, s(c.x));
-            let yy = _mm256_sub_ps(cy, s(c.y));
-            let yz = _mm256_sub_ps(cz, s(c.z));
-            let s2 = _mm256_fmadd_ps(yx, yx, _mm256_fmadd_ps(yy, yy, _mm256_fmadd_ps(yz, yz, d2)));
-            let r = rsqrt(s2);
-            let r2 = _mm256_mul_ps(r, r);
-            let inv3 = _mm256_mul_ps(r, r2);
-            let inv5 = _mm256_mul_ps(_mm256_mul_ps(s(3.0), inv3), r2);
-            let row = |i: usize| {
-                _mm256_fmadd_ps(
-                    s(m[i]),
-                    yx,
-                    _mm256_fmadd_ps(s(m[i + 1]), yy, _mm256_mul_ps(s(m[i + 2]), yz)),
+        let none = Moments {
+            total: [0.0; 3],
+            twist: [0.0; 3],
+            moment: [0.0; 9],
+        };
+        for pair in self.far.chunks(2) {
+            let node = |k: usize| {
+                let node = &self.tree.nodes[pair[k.min(pair.len() - 1)]];
+                let moments = if k < pair.len() { node.moments } else { none };
+                ((node.centre - self.origin).cast::<f32>(), moments)
+            };
+            let ((c0, n0), (c1, n1)) = (node(0), node(1));
+            // One value per node: the first node's in the lower lanes, the second's above.
+            let s = |a: f32, b: f32| -> S::f32s {
+                let lanes: [f32; LANES] = std::array::from_fn(|l| if l < CORNERS { a } else { b });
+                pulp::cast(lanes)
+            };
+            let yx = simd.sub_f32s(cx, s(c0.x, c1.x));
+            let yy = simd.sub_f32s(cy, s(c0.y, c1.y));
+            let yz = simd.sub_f32s(cz, s(c0.z, c1.z));
+            let s2 = simd.add_f32s(
+                simd.add_f32s(
+                    simd.add_f32s(simd.mul_f32s(yx, yx), simd.mul_f32s(yy, yy)),
+                    simd.mul_f32s(yz, yz),
+                ),
+                d2,
+            );
+            let inv3 = simd.div_f32s(simd.splat_f32s(1.0), simd.mul_f32s(s2, simd.sqrt_f32s(s2)));
+            let inv5 = simd.div_f32s(simd.mul_f32s(simd.splat_f32s(3.0), inv3), s2);
+            let m = |e: usize| s(n0.moment[e], n1.moment[e]);
+            let row = |e: usize| {
+                simd.add_f32s(
+                    simd.add_f32s(simd.mul_f32s(m(e), yx), simd.mul_f32s(m(e + 1), yy)),
+                    simd.mul_f32s(m(e + 2), yz),
                 )
             };
             let (mx, my, mz) = (row(0), row(3), row(6));
+            let b = |e: usize| s(n0.total[e], n1.total[e]);
+            let a = |e: usize| s(n0.twist[e], n1.twist[e]);
+            let cross =
+                |p1, q2, p2, q1| simd.sub_f32s(simd.mul_f32s(p1, q2), simd.mul_f32s(p2, q1));
             // (B x y - a) / s^3 + 3 (M y) x y / s^5, one component.
-            let comp =
-                |b1: f32, y2: __m256, b2: f32, y1: __m256, a0: f32, m1: __m256, m2: __m256| {
-                    let mono =
-                        _mm256_sub_ps(_mm256_fmsub_ps(s(b1), y2, _mm256_mul_ps(s(b2), y1)), s(a0));
-                    let dip = _mm256_fmsub_ps(m1, y2, _mm256_mul_ps(m2, y1));
-                    _mm256_fmadd_ps(mono, inv3, _mm256_mul_ps(dip, inv5))
-                };
-            ux = _mm256_add_ps(ux, comp(b[1], yz, b[2], yy, a[0], my, mz));
-            uy = _mm256_add_ps(uy, comp(b[2], yx, b[0], yz, a[1], mz, mx));
-            uz = _mm256_add_ps(uz, comp(b[0], yy, b[1], yx, a[2], mx, my));
+            let comp = |mono, twist, dip| {
+                simd.add_f32s(
+                    simd.mul_f32s(simd.sub_f32s(mono, twist), inv3),
+                    simd.mul_f32s(dip, inv5),
+                )
+            };
+            ux = simd.add_f32s(
+                ux,
+                comp(cross(b(1), yz, b(2), yy), a(0), cross(my, yz, mz, yy)),
+            );
+            uy = simd.add_f32s(
+                uy,
+                comp(cross(b(2), yx, b(0), yz), a(1), cross(mz, yx, mx, yz)),
+            );
+            uz = simd.add_f32s(
+                uz,
+                comp(cross(b(0), yy, b(1), yx), a(2), cross(mx, yy, my, yx)),
+            );
         }
-        let lanes = |v: __m256| {
-            let mut l = [0f32; 8];
-            _mm256_storeu_ps(l.as_mut_ptr(), v);
-            l
-        };
+        let lanes = |v: S::f32s| -> [f32; LANES] { pulp::cast(v) };
         let (ux, uy, uz) = (lanes(ux), lanes(uy), lanes(uz));
+        let corner = |u: &[f32; LANES], c: usize| Real::from(u[c]) + Real::from(u[c + CORNERS]);
         std::array::from_fn(|c| {
-            Vec3::new(Real::from(ux[c]), Real::from(uy[c]), Real::from(uz[c])) / (4.0 * PI)
+            Vec3::new(corner(&ux, c), corner(&uy, c), corner(&uz, c)) / (4.0 * PI)
         })
     }
 }
@@ -609,36 +577,88 @@ mod tests {
         (x, b)
     }
 
-    /// The dispatched near-field sum (SIMD where the CPU has it) equals the portable loop to
-    /// f32 rounding: the Newton-refined reciprocal square root costs no accuracy.
+    /// Every level the CPU runs gives the scalar level's near-field sums bit for bit, and
+    /// they equal the f64 sum to f32 rounding.
     #[test]
-    fn near_field_lanes_agree() {
+    fn near_field_levels_agree() {
         let (x, b) = sources(37);
         let mut lanes = Lanes::default();
         for (x, b) in x.iter().zip(&b) {
             lanes.push(*x, *b);
         }
-        for p in [Vec3::new(0.1, -0.3, 0.2), Vec3::new(2.0, 1.0, -1.5)] {
-            let p = p.cast::<f32>();
-            let (fast, portable) = (lanes.sum_at(p, 1e-3), lanes.sum_lanes(p, 1e-3));
-            assert!(
-                (fast - portable).norm() < 1e-5 * portable.norm(),
-                "{fast} vs {portable}"
-            );
+        let targets = [Vec3::new(0.1, -0.3, 0.2), Vec3::new(2.0, 1.0, -1.5)];
+        let d2 = 1e-3;
+        let run = |level: Level| {
+            let mut out = vec![Vec3::zeros(); targets.len()];
+            level.run(NearSum {
+                sources: &lanes,
+                origin: Vec3::zeros(),
+                targets: &targets,
+                d2,
+                out: &mut out,
+            });
+            out
+        };
+        let scalar = run(Level::Scalar);
+        for (p, u) in targets.iter().zip(&scalar) {
+            let exact: Vec3 = x
+                .iter()
+                .zip(&b)
+                .map(|(x, b)| {
+                    let y = p - x;
+                    b.cross(&y) / (y.norm_squared() + Real::from(d2)).powf(1.5)
+                })
+                .sum::<Vec3>()
+                / (4.0 * PI);
+            assert!((u - exact).norm() < 1e-5 * exact.norm(), "{u} vs {exact}");
+        }
+        for level in Level::ALL.into_iter().filter(|l| l.supported()) {
+            assert_eq!(run(level), scalar, "{level:?}");
         }
     }
 
-    /// The same for the far field at a box's eight corners, from every node of a tree.
+    /// The same for the far field at a box's eight corners, from every node of a tree (an
+    /// odd number of nodes, so one pairs with nothing), against the expansion in f64.
     #[test]
-    fn far_field_lanes_agree() {
+    fn far_field_levels_agree() {
         let (x, b) = sources(300);
         let tree = BiotSavartTree::new(&x, &b, 0.01);
-        let nodes: Vec<usize> = (1..tree.nodes.len()).collect();
+        let mut nodes: Vec<usize> = (1..tree.nodes.len()).collect();
+        if nodes.len().is_multiple_of(2) {
+            nodes.pop();
+        }
         let (origin, half) = (Vec3::new(4.0, 0.5, -3.0), Vec3::new(0.2, 0.1, 0.3));
-        let fast = tree.far_at_corners(&nodes, origin, half);
-        let portable = tree.far_corner_lanes(&nodes, origin, half);
-        for (f, p) in fast.iter().zip(&portable) {
-            assert!((f - p).norm() < 1e-5 * p.norm(), "{f} vs {p}");
+        let run = |level: Level| {
+            level.run(FarAtCorners {
+                tree: &tree,
+                far: &nodes,
+                origin,
+                half,
+            })
+        };
+        let scalar = run(Level::Scalar);
+        for (c, u) in scalar.iter().enumerate() {
+            let pick = |a: usize| if c >> a & 1 == 1 { half[a] } else { -half[a] };
+            let corner = origin + Vec3::new(pick(0), pick(1), pick(2));
+            let exact: Vec3 = nodes
+                .iter()
+                .map(|&n| {
+                    let node = &tree.nodes[n];
+                    let m = &node.moments;
+                    let f = |v: &[f32]| Vec3::new(v[0].into(), v[1].into(), v[2].into());
+                    let (total, twist) = (f(&m.total), f(&m.twist));
+                    let moment = Mat3::from_fn(|i, j| m.moment[3 * i + j].into());
+                    let y = corner - node.centre;
+                    let s2 = y.norm_squared() + tree.core * tree.core;
+                    (total.cross(&y) - twist) / s2.powf(1.5)
+                        + 3.0 * (moment * y).cross(&y) / s2.powf(2.5)
+                })
+                .sum::<Vec3>()
+                / (4.0 * PI);
+            assert!((u - exact).norm() < 1e-5 * exact.norm(), "{u} vs {exact}");
+        }
+        for level in Level::ALL.into_iter().filter(|l| l.supported()) {
+            assert_eq!(run(level), scalar, "{level:?}");
         }
     }
 }

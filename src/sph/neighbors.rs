@@ -1,8 +1,11 @@
 //! Neighbour search on the compact hashed uniform grid of [`crate::spatial`]: neighbour lists
 //! built in parallel, cell chunk by cell chunk, into one compressed-row (CSR) array of `u32`.
 
+use crate::simd::{bits, pack_indices, Level, LANES};
+use crate::spatial::Cell;
 pub use crate::spatial::{cell_order, cell_order_and_codes, permute, resize, CellGrid};
 use crate::{Real, Vec3};
+use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 
 /// Neighbour lists in compressed-row form: the neighbours of point i are
@@ -48,42 +51,15 @@ impl NeighborLists {
         exclude_self: bool,
     ) -> Self {
         debug_assert!(radius <= query_grid.cell * (1.0 + 1e-12));
-        let r2 = radius * radius;
-        let soa = Components::of(targets);
-        const CHUNK: usize = 64;
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = query_grid
-            .cells
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                let points = chunk.iter().map(|c| (c.end - c.start) as usize).sum();
-                let mut counts = Vec::with_capacity(points);
-                // About 33 neighbours a particle inside a fluid at rest density (h = 2 spacings);
-                // reserving them up front saves the copies of a growing list.
-                let mut idx = Vec::with_capacity(points * 40);
-                let mut ranges = Vec::with_capacity(27);
-                let mut found = Vec::new();
-                for c in chunk {
-                    target_grid.ranges_around(c.coord, &mut ranges);
-                    if ranges.is_empty() {
-                        // No targets near (the walls' grid, seen from inside the fluid).
-                        counts.extend(std::iter::repeat_n(0, (c.end - c.start) as usize));
-                        continue;
-                    }
-                    merge_adjacent(&mut ranges);
-                    let candidates: usize = ranges.iter().map(|&(s, e)| (e - s) as usize).sum();
-                    found.resize((candidates + filter::LANES).max(found.len()), 0);
-                    for i in c.start..c.end {
-                        let skip = if exclude_self { i } else { u32::MAX };
-                        let xi = queries[i as usize];
-                        let n = filter::near(&soa, &ranges, &xi, r2, skip, &mut found);
-                        idx.extend_from_slice(&found[..n]);
-                        counts.push(n as u32);
-                    }
-                }
-                (counts, idx)
-            })
-            .collect();
-        Self::assemble(queries.len(), &parts)
+        let search = Search {
+            queries,
+            query_grid,
+            targets: &Components::of(targets),
+            target_grid,
+            r2: radius * radius,
+            exclude_self,
+        };
+        search.run(Level::active())
     }
 
     /// Joins per-chunk (counts, indices) parts, in order, into one set of lists, copying the
@@ -114,7 +90,79 @@ impl NeighborLists {
     }
 }
 
-/// Target positions by component, so that eight consecutive points are one vector load each.
+/// One search: what [`NeighborLists::build`] takes, the targets by component.
+struct Search<'a> {
+    queries: &'a [Vec3],
+    query_grid: &'a CellGrid,
+    targets: &'a Components,
+    target_grid: &'a CellGrid,
+    r2: Real,
+    exclude_self: bool,
+}
+
+impl Search<'_> {
+    /// The lists, with the distance test compiled for `level`.
+    fn run(&self, level: Level) -> NeighborLists {
+        const CHUNK: usize = 64;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = self
+            .query_grid
+            .cells
+            .par_chunks(CHUNK)
+            .map(|cells| {
+                level.run(Chunk {
+                    search: self,
+                    cells,
+                })
+            })
+            .collect();
+        NeighborLists::assemble(self.queries.len(), &parts)
+    }
+}
+
+/// The neighbour counts and indices of the query points of a chunk of cells.
+struct Chunk<'a> {
+    search: &'a Search<'a>,
+    cells: &'a [Cell],
+}
+
+impl WithSimd for Chunk<'_> {
+    type Output = (Vec<u32>, Vec<u32>);
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
+        let s = self.search;
+        let points = self.cells.iter().map(|c| (c.end - c.start) as usize).sum();
+        let mut counts = Vec::with_capacity(points);
+        // About 33 neighbours a particle inside a fluid at rest density (h = 2 spacings);
+        // reserving them up front saves the copies of a growing list.
+        let mut idx = Vec::with_capacity(points * 40);
+        let mut ranges = Vec::with_capacity(27);
+        let mut found = Vec::new();
+        for c in self.cells {
+            s.target_grid.ranges_around(c.coord, &mut ranges);
+            if ranges.is_empty() {
+                // No targets near (the walls' grid, seen from inside the fluid).
+                counts.extend(std::iter::repeat_n(0, (c.end - c.start) as usize));
+                continue;
+            }
+            merge_adjacent(&mut ranges);
+            let candidates: usize = ranges.iter().map(|&(s, e)| (e - s) as usize).sum();
+            found.resize((candidates + LANES).max(found.len()), 0);
+            for i in c.start..c.end {
+                let skip = if s.exclude_self { i } else { u32::MAX };
+                let xi = s.queries[i as usize];
+                let n = near(simd, s.targets, &ranges, &xi, s.r2, skip, &mut found);
+                idx.extend_from_slice(&found[..n]);
+                counts.push(n as u32);
+            }
+        }
+        (counts, idx)
+    }
+}
+
+/// Target positions by component, so that [`LANES`] consecutive points are one vector load
+/// each, followed by [`LANES`] points at infinity, so that a range's last vector can be
+/// loaded whole.
 #[derive(Debug)]
 struct Components {
     x: Vec<Real>,
@@ -124,10 +172,16 @@ struct Components {
 
 impl Components {
     fn of(points: &[Vec3]) -> Self {
+        let padded = |axis: usize| {
+            let mut c = Vec::with_capacity(points.len() + LANES);
+            c.par_extend(points.par_iter().map(|p| p[axis]));
+            c.extend([Real::INFINITY; LANES]);
+            c
+        };
         Self {
-            x: points.par_iter().map(|p| p.x).collect(),
-            y: points.par_iter().map(|p| p.y).collect(),
-            z: points.par_iter().map(|p| p.z).collect(),
+            x: padded(0),
+            y: padded(1),
+            z: padded(2),
         }
     }
 }
@@ -146,124 +200,71 @@ fn merge_adjacent(ranges: &mut Vec<(u32, u32)>) {
 }
 
 /// The distance test of the search: the points of `ranges` closer than sqrt(`r2`) to `xi`,
-/// except the index `skip`, written to the front of `found` (at least [`LANES`] longer than the
-/// ranges hold); returns how many. Both forms compute |x_i - x_j|^2 with the same f64
-/// operations in the same order (no fused multiply-add), so they find exactly the same
-/// neighbours.
-mod filter {
-    use super::Components;
-    use crate::{Real, Vec3};
-
-    /// Candidates per vector of the wide form.
-    pub const LANES: usize = 8;
-
-    /// Every candidate is written and the count advances only for a neighbour, without a
-    /// branch: about one candidate in six is a neighbour, and once particles leave the lattice
-    /// a branch on it mispredicts so often that the search took twice as long.
-    pub fn scalar(
-        c: &Components,
-        ranges: &[(u32, u32)],
-        xi: &Vec3,
-        r2: Real,
-        skip: u32,
-        found: &mut [u32],
-    ) -> usize {
-        let mut n = 0;
-        for &(s, e) in ranges {
-            for j in s..e {
-                let k = j as usize;
-                let (dx, dy, dz) = (xi.x - c.x[k], xi.y - c.y[k], xi.z - c.z[k]);
-                found[n] = j;
-                let near = dx * dx + dy * dy + dz * dz < r2;
-                n += usize::from(near & (j != skip));
-            }
-        }
-        n
-    }
-
-    /// The neighbours by [`wide`] where the CPU runs it, else by [`scalar`].
-    pub fn near(
-        c: &Components,
-        ranges: &[(u32, u32)],
-        xi: &Vec3,
-        r2: Real,
-        skip: u32,
-        found: &mut [u32],
-    ) -> usize {
-        #[cfg(target_arch = "x86_64")]
-        if wide_available() {
-            // SAFETY: the CPU has the features, checked just above.
-            return unsafe { wide(c, ranges, xi, r2, skip, found) };
-        }
-        scalar(c, ranges, xi, r2, skip, found)
-    }
-
-    /// Whether the CPU runs [`wide`].
-    #[cfg(target_arch = "x86_64")]
-    pub fn wide_available() -> bool {
-        is_x86_feature_detected!("avx512f")
-            && is_x86_feature_detected!("avx512vl")
-            && is_x86_feature_detected!("popcnt")
-    }
-
-    /// [`scalar`] eight candidates at a time on AVX-512: masked loads read a range's last,
-    /// partial vector, the distance test gives a lane mask, and the hardware compress packs the
-    /// neighbours' indices to the front of a vector, which is stored whole at `found[n]` (the
-    /// lanes past the count are overwritten next).
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512F, AVX-512VL and POPCNT ([`wide_available`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512vl,popcnt")]
-    pub unsafe fn wide(
-        c: &Components,
-        ranges: &[(u32, u32)],
-        xi: &Vec3,
-        r2: Real,
-        skip: u32,
-        found: &mut [u32],
-    ) -> usize {
-        use std::arch::x86_64::*;
-        let total: usize = ranges.iter().map(|&(s, e)| (e - s) as usize).sum();
-        assert!(found.len() >= total + LANES);
-        let (px, py, pz) = (
-            _mm512_set1_pd(xi.x),
-            _mm512_set1_pd(xi.y),
-            _mm512_set1_pd(xi.z),
+/// except the index `skip`, written in index order to the front of `found` (at least
+/// [`LANES`] longer than the ranges hold); returns how many.
+///
+/// [`LANES`] candidates at a time: |x_i - x_j|^2 in one vector (the same f64 operations, no
+/// fused multiply-add, at every level, so every level finds the same neighbours), the test as
+/// a bit mask, and the neighbours' indices packed to the front of `found` without a branch:
+/// about one candidate in six is a neighbour, and once particles leave the lattice a branch
+/// on it mispredicts so often that the search took twice as long.
+#[inline(always)]
+fn near<S: Simd>(
+    simd: S,
+    c: &Components,
+    ranges: &[(u32, u32)],
+    xi: &Vec3,
+    r2: Real,
+    skip: u32,
+    found: &mut [u32],
+) -> usize {
+    let (px, py, pz) = (
+        simd.splat_f64s(xi.x),
+        simd.splat_f64s(xi.y),
+        simd.splat_f64s(xi.z),
+    );
+    let r2 = simd.splat_f64s(r2);
+    // Candidate indices as f64 lanes (exact below 2^53), tested against the range's end and
+    // `skip` in vector compares.
+    let lane: [Real; LANES] = std::array::from_fn(|l| l as Real);
+    let (lane, step) = (pulp::cast(lane), simd.splat_f64s(LANES as Real));
+    let skip = simd.splat_f64s(Real::from(skip));
+    let mut n = 0;
+    for &(s, e) in ranges {
+        // The range's candidates in whole vectors: the last one reads past `e` into the next
+        // points or the padding, lanes the mask below drops.
+        let (s, len) = (s as usize, ((e - s) as usize).next_multiple_of(LANES));
+        let (x, y, z) = (&c.x[s..s + len], &c.y[s..s + len], &c.z[s..s + len]);
+        let (x, y, z) = (
+            S::as_simd_f64s(x).0,
+            S::as_simd_f64s(y).0,
+            S::as_simd_f64s(z).0,
         );
-        let (r2, skip) = (_mm512_set1_pd(r2), _mm256_set1_epi32(skip as i32));
-        let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-        let mut n = 0;
-        for &(s, e) in ranges {
-            assert!(e as usize <= c.x.len() && e as usize <= c.y.len() && e as usize <= c.z.len());
-            for k in (s..e).step_by(LANES) {
-                // The lanes below `e`, computed without a branch (an if/else here made the
-                // search in the dam-break step 1.7 times slower).
-                let valid = ((1u16 << (e - k).min(LANES as u32)) - 1) as u8;
-                let k = k as usize;
-                // SAFETY: the masked loads touch only lanes below `e`, inside the arrays
-                // (asserted above); `n + LANES <= total + LANES <= found.len()`.
-                unsafe {
-                    let load = |a: &[Real]| _mm512_maskz_loadu_pd(valid, a.as_ptr().add(k));
-                    let dx = _mm512_sub_pd(px, load(&c.x));
-                    let dy = _mm512_sub_pd(py, load(&c.y));
-                    let dz = _mm512_sub_pd(pz, load(&c.z));
-                    let d2 = _mm512_add_pd(
-                        _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                        _mm512_mul_pd(dz, dz),
-                    );
-                    let index = _mm256_add_epi32(_mm256_set1_epi32(k as i32), lane);
-                    let near = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d2, r2)
-                        & _mm256_cmpneq_epi32_mask(index, skip)
-                        & valid;
-                    let packed = _mm256_maskz_compress_epi32(near, index);
-                    _mm256_storeu_si256(found.as_mut_ptr().add(n).cast(), packed);
-                    n += near.count_ones() as usize;
-                }
-            }
+        let end = simd.splat_f64s(Real::from(e));
+        let mut index = simd.add_f64s(simd.splat_f64s(s as Real), lane);
+        let vectors = x.iter().zip(y).zip(z);
+        for (((&x, &y), &z), k) in vectors.zip((s as u32..).step_by(LANES)) {
+            let (dx, dy, dz) = (
+                simd.sub_f64s(px, x),
+                simd.sub_f64s(py, y),
+                simd.sub_f64s(pz, z),
+            );
+            let d2 = simd.add_f64s(
+                simd.add_f64s(simd.mul_f64s(dx, dx), simd.mul_f64s(dy, dy)),
+                simd.mul_f64s(dz, dz),
+            );
+            // Within the radius, below `e` and not `skip`, without a branch (an if/else for
+            // the range's last vector made the search in the dam-break step 1.7 times slower).
+            let near = simd.and_m64s(
+                simd.and_m64s(simd.less_than_f64s(d2, r2), simd.less_than_f64s(index, end)),
+                simd.not_m64s(simd.equal_f64s(index, skip)),
+            );
+            index = simd.add_f64s(index, step);
+            let out = (&mut found[n..n + LANES]).try_into().unwrap();
+            n += pack_indices(bits::<S>(near), k, out);
         }
-        n
     }
+    n
 }
 
 #[cfg(test)]
@@ -293,48 +294,48 @@ mod tests {
         x
     }
 
-    /// The vector filter and the scalar one find the same neighbours, in the same order, and
-    /// both are the brute-force set, for every point with and without the self exclusion.
-    /// (Without AVX-512 on the CPU only the scalar filter runs.)
+    /// At every level the CPU runs, the lists are exactly the scalar level's (same
+    /// neighbours in the same order) and hold exactly the brute-force pairs within the
+    /// radius: of a set with itself (self excluded) and of another set (nothing excluded).
     #[test]
-    fn the_vector_and_scalar_filters_find_exactly_the_pairs_within_the_radius() {
-        let x = points(7);
+    fn every_level_finds_exactly_the_pairs_within_the_radius() {
+        let (x, others) = (points(7), points(8));
         let radius = 0.2;
         let grid = CellGrid::build(&x, radius);
-        let soa = Components::of(&x);
-        let (mut ranges, mut found) = (Vec::new(), vec![0; 1000]);
-        let mut pairs = 0;
-        for c in &grid.cells {
-            grid.ranges_around(c.coord, &mut ranges);
-            merge_adjacent(&mut ranges);
-            for i in c.start..c.end {
-                for skip in [i, u32::MAX] {
-                    let xi = x[i as usize];
-                    let n = filter::scalar(&soa, &ranges, &xi, radius * radius, skip, &mut found);
-                    let mut got = found[..n].to_vec();
-                    got.sort_unstable();
-                    let want: Vec<u32> = (0..x.len() as u32)
-                        .filter(|&j| {
-                            j != skip && (xi - x[j as usize]).norm_squared() < radius * radius
-                        })
-                        .collect();
-                    assert_eq!(got, want, "point {i}");
-                    pairs += n;
-                    #[cfg(target_arch = "x86_64")]
-                    if filter::wide_available() {
-                        let mut wide_found = vec![0; found.len()];
-                        // SAFETY: the CPU has the features, checked just above.
-                        let m = unsafe {
-                            filter::wide(&soa, &ranges, &xi, radius * radius, skip, &mut wide_found)
-                        };
-                        assert_eq!(&wide_found[..m], &found[..n], "point {i}");
-                    }
-                }
+        let other_grid = CellGrid::build(&others, radius);
+        for (targets, target_grid, exclude_self) in
+            [(&x, &grid, true), (&others, &other_grid, false)]
+        {
+            let search = Search {
+                queries: &x,
+                query_grid: &grid,
+                targets: &Components::of(targets),
+                target_grid,
+                r2: radius * radius,
+                exclude_self,
+            };
+            let scalar = search.run(Level::Scalar);
+            for (i, xi) in x.iter().enumerate() {
+                let mut got = scalar.of(i).to_vec();
+                got.sort_unstable();
+                let want: Vec<u32> = (0..targets.len() as u32)
+                    .filter(|&j| {
+                        !(exclude_self && j == i as u32)
+                            && (xi - targets[j as usize]).norm_squared() < radius * radius
+                    })
+                    .collect();
+                assert_eq!(got, want, "point {i}");
+            }
+            assert!(
+                scalar.indices.len() > 10 * x.len(),
+                "{} pairs: the test would be vacuous",
+                scalar.indices.len()
+            );
+            for level in Level::ALL.into_iter().filter(|l| l.supported()) {
+                let lists = search.run(level);
+                assert_eq!(lists.offsets, scalar.offsets, "{level:?}");
+                assert_eq!(lists.indices, scalar.indices, "{level:?}");
             }
         }
-        assert!(
-            pairs > 20 * x.len(),
-            "{pairs} pairs: the test would be vacuous"
-        );
     }
 }

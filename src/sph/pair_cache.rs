@@ -19,9 +19,11 @@
 //! iterations then never visit the boundary pairs.
 
 use super::boundary::BoundaryParticles;
-use super::kernel::CubicSpline;
+use super::kernel::{CubicSpline, KernelConstants};
 use super::neighbors::NeighborLists;
+use crate::simd::{Level, LANES};
 use crate::{Real, Vec3};
+use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 
 /// A kernel gradient stored in single precision.
@@ -91,6 +93,17 @@ impl PairCache {
             volume: Volumes::Each(&boundary.volume),
             v: Some(&boundary.v),
         };
+        let rows = Rows {
+            kernel: kernel.constants(),
+            x,
+            fluid: &fluid,
+            walls: &walls,
+            fluid_lists,
+            boundary_lists,
+            w0,
+            tiny,
+        };
+        let level = Level::active();
         let fluid_blocks = split_blocks(fluid_lists, &mut self.fluid);
         let boundary_blocks = split_blocks(boundary_lists, &mut self.boundary);
         fluid_blocks
@@ -102,23 +115,17 @@ impl PairCache {
             .zip(self.wall_rate.par_chunks_mut(BLOCK))
             .enumerate()
             .for_each(
-                |(blk, (((((mut fg, mut bg), ratio), factor), wall_grad), wall_rate))| {
-                    for k in 0..ratio.len() {
-                        let i = blk * BLOCK + k;
-                        let fl = fluid_lists.of(i);
-                        let (fseg, rest) = fg.split_at_mut(fl.len());
-                        fg = rest;
-                        let bl = boundary_lists.of(i);
-                        let (bseg, rest) = bg.split_at_mut(bl.len());
-                        bg = rest;
-                        let f = row::sums(kernel, &x[i], &fluid, fl, fseg, w0);
-                        let b = row::sums(kernel, &x[i], &walls, bl, bseg, f.w);
-                        ratio[k] = b.w;
-                        let denom = f.grad_sq + (f.grad + b.grad).norm_squared();
-                        factor[k] = if denom > tiny { 1.0 / denom } else { 0.0 };
-                        wall_grad[k] = b.grad;
-                        wall_rate[k] = b.rate;
-                    }
+                |(blk, (((((fluid, boundary), ratio), factor), wall_grad), wall_rate))| {
+                    level.run(Block {
+                        rows: &rows,
+                        first: blk * BLOCK,
+                        fluid,
+                        boundary,
+                        ratio,
+                        factor,
+                        wall_grad,
+                        wall_rate,
+                    })
                 },
             );
     }
@@ -164,218 +171,172 @@ struct RowSums {
     rate: Real,
 }
 
+/// What every row of a cache update reads.
+struct Rows<'a> {
+    kernel: KernelConstants,
+    x: &'a [Vec3],
+    fluid: &'a Targets<'a>,
+    walls: &'a Targets<'a>,
+    fluid_lists: &'a NeighborLists,
+    boundary_lists: &'a NeighborLists,
+    /// The self contribution to the density ratio, V W(0).
+    w0: Real,
+    /// The DFSPH factor's denominator below which a particle gets no factor.
+    tiny: Real,
+}
+
+/// The rows of the [`BLOCK`] particles from `first` on: their cache entries (`fluid`,
+/// `boundary`) and per-particle outputs.
+struct Block<'a> {
+    rows: &'a Rows<'a>,
+    first: usize,
+    fluid: &'a mut [Grad32],
+    boundary: &'a mut [Grad32],
+    ratio: &'a mut [Real],
+    factor: &'a mut [Real],
+    wall_grad: &'a mut [Vec3],
+    wall_rate: &'a mut [Real],
+}
+
+impl WithSimd for Block<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let r = self.rows;
+        let (mut fg, mut bg) = (self.fluid, self.boundary);
+        for k in 0..self.ratio.len() {
+            let i = self.first + k;
+            let fl = r.fluid_lists.of(i);
+            let (fseg, rest) = fg.split_at_mut(fl.len());
+            fg = rest;
+            let bl = r.boundary_lists.of(i);
+            let (bseg, rest) = bg.split_at_mut(bl.len());
+            bg = rest;
+            let f = row(simd, &r.kernel, &r.x[i], r.fluid, fl, fseg, r.w0);
+            let b = row(simd, &r.kernel, &r.x[i], r.walls, bl, bseg, f.w);
+            self.ratio[k] = b.w;
+            let denom = f.grad_sq + (f.grad + b.grad).norm_squared();
+            self.factor[k] = if denom > r.tiny { 1.0 / denom } else { 0.0 };
+            self.wall_grad[k] = b.grad;
+            self.wall_rate[k] = b.rate;
+        }
+    }
+}
+
 /// One particle's row of the cache: grad W_ij into `out` (one slot per entry of `list`) and the
-/// row's sums, the density sum continuing from `w0`. The scalar and the wide form evaluate each
-/// pair with the same f64 operations and add the sums in the same order, so they give the same
-/// results to the last bit.
-mod row {
-    use super::{Grad32, RowSums, Targets, Volumes};
-    use crate::sph::kernel::CubicSpline;
-    use crate::{Real, Vec3};
-
-    pub fn scalar(
-        kernel: &CubicSpline,
-        xi: &Vec3,
-        t: &Targets,
-        list: &[u32],
-        out: &mut [Grad32],
-        w0: Real,
-    ) -> RowSums {
-        let mut sums = RowSums {
-            w: w0,
-            ..RowSums::default()
+/// row's sums, the density sum continuing from `w0`.
+///
+/// [`LANES`] pairs at a time: the targets' positions (and volumes and velocities) gathered by
+/// index, [`CubicSpline::w_grad`]'s f64 operations in the same order lane by lane, with its
+/// two branches as masks, the gradients rounded to f32 and stored pair by pair; the sums are
+/// then added pair by pair in the list's order. So every level gives `w_grad`'s results to the
+/// last bit (a different order of the sums changes a run's trajectory at the rounding level).
+#[inline(always)]
+fn row<S: Simd>(
+    simd: S,
+    c: &KernelConstants,
+    xi: &Vec3,
+    t: &Targets,
+    list: &[u32],
+    out: &mut [Grad32],
+    w0: Real,
+) -> RowSums {
+    let mut sums = RowSums {
+        w: w0,
+        ..RowSums::default()
+    };
+    let splat = |v: Real| simd.splat_f64s(v);
+    let (h2, tiny) = (c.h * c.h, 1e-24 * c.h * c.h);
+    for (js, slots) in list.chunks(LANES).zip(out.chunks_mut(LANES)) {
+        let dx = simd.sub_f64s(splat(xi.x), gather::<S>(js, |j| t.x[j].x));
+        let dy = simd.sub_f64s(splat(xi.y), gather::<S>(js, |j| t.x[j].y));
+        let dz = simd.sub_f64s(splat(xi.z), gather::<S>(js, |j| t.x[j].z));
+        let r2 = simd.add_f64s(
+            simd.add_f64s(simd.mul_f64s(dx, dx), simd.mul_f64s(dy, dy)),
+            simd.mul_f64s(dz, dz),
+        );
+        let r = simd.sqrt_f64s(r2);
+        let q = simd.mul_f64s(r, splat(c.inv_h));
+        let inner = simd.less_than_or_equal_f64s(q, splat(0.5));
+        let t1 = simd.sub_f64s(splat(1.0), q);
+        let tw = simd.max_f64s(t1, splat(0.0));
+        // W: k (6 q q (q - 1) + 1) inside q <= 1/2, k 2 t^3 outside.
+        let six_qq = simd.mul_f64s(simd.mul_f64s(splat(6.0), q), q);
+        let w_in = simd.mul_f64s(
+            splat(c.k),
+            simd.add_f64s(
+                simd.mul_f64s(six_qq, simd.sub_f64s(q, splat(1.0))),
+                splat(1.0),
+            ),
+        );
+        let w_out = simd.mul_f64s(simd.mul_f64s(simd.mul_f64s(splat(c.k * 2.0), tw), tw), tw);
+        // dW/dq: l q (3 q - 2) inside, -l t^2 outside; grad W = x dW/dq / (r h).
+        let d_in = simd.mul_f64s(
+            simd.mul_f64s(splat(c.l), q),
+            simd.sub_f64s(simd.mul_f64s(splat(3.0), q), splat(2.0)),
+        );
+        let d_out = simd.mul_f64s(simd.mul_f64s(splat(-c.l), t1), t1);
+        let f = simd.div_f64s(
+            simd.select_f64s(inner, d_in, d_out),
+            simd.mul_f64s(r, splat(c.h)),
+        );
+        // Inside the support and apart (a coincident pair has W(0) and no gradient).
+        let near = simd.less_than_f64s(r2, splat(h2));
+        let apart = simd.and_m64s(near, simd.greater_than_or_equal_f64s(r2, splat(tiny)));
+        let w = simd.select_f64s(near, simd.select_f64s(inner, w_in, w_out), splat(0.0));
+        let f = simd.select_f64s(apart, f, splat(0.0));
+        let (gx, gy, gz) = (
+            simd.mul_f64s(dx, f),
+            simd.mul_f64s(dy, f),
+            simd.mul_f64s(dz, f),
+        );
+        let vj = match t.volume {
+            Volumes::Uniform(v) => splat(v),
+            Volumes::Each(v) => gather::<S>(js, |j| v[j]),
         };
-        for (slot, &j) in out.iter_mut().zip(list) {
-            let j = j as usize;
-            let (w, g) = kernel.w_grad(&(xi - t.x[j]));
-            let vj = match t.volume {
-                Volumes::Uniform(v) => v,
-                Volumes::Each(v) => v[j],
-            };
-            *slot = [g.x as f32, g.y as f32, g.z as f32];
-            let vg = vj * g;
-            sums.w += vj * w;
-            sums.grad += vg;
-            sums.grad_sq += vg.norm_squared();
-            if let Some(v) = t.v {
-                sums.rate += vj * v[j].dot(&g);
-            }
-        }
-        sums
-    }
-
-    /// The row by [`wide`] where the CPU runs it, else by [`scalar`].
-    pub fn sums(
-        kernel: &CubicSpline,
-        xi: &Vec3,
-        t: &Targets,
-        list: &[u32],
-        out: &mut [Grad32],
-        w0: Real,
-    ) -> RowSums {
-        #[cfg(target_arch = "x86_64")]
-        if wide_available() {
-            // SAFETY: the CPU has the feature, checked just above.
-            return unsafe { wide(kernel, xi, t, list, out, w0) };
-        }
-        scalar(kernel, xi, t, list, out, w0)
-    }
-
-    /// Whether the CPU runs [`wide`].
-    #[cfg(target_arch = "x86_64")]
-    pub fn wide_available() -> bool {
-        is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
-    }
-
-    /// [`scalar`] for eight pairs at a time on AVX-512: the targets' positions (and volumes
-    /// and velocities) gathered by index, [`CubicSpline::w_grad`]'s operations lane by lane
-    /// with its two branches as masks, the gradients rounded to f32 and stored pair by pair.
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512F and AVX-512VL ([`wide_available`]). Without VL enabled here
-    /// the masked 256-bit index load compiles to a call that spills every vector register.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512vl")]
-    pub unsafe fn wide(
-        kernel: &CubicSpline,
-        xi: &Vec3,
-        t: &Targets,
-        list: &[u32],
-        out: &mut [Grad32],
-        w0: Real,
-    ) -> RowSums {
-        use std::arch::x86_64::*;
-        assert_eq!(out.len(), list.len());
-        assert!(list.iter().all(|&j| (j as usize) < t.x.len()));
-        if let Volumes::Each(v) = t.volume {
-            assert_eq!(v.len(), t.x.len());
-        }
-        if let Some(v) = t.v {
-            assert_eq!(v.len(), t.x.len());
-        }
-        let c = kernel.constants();
-        let splat = _mm512_set1_pd;
-        let (h2, tiny) = (c.h * c.h, 1e-24 * c.h * c.h);
-        let mut sums = RowSums {
-            w: w0,
-            ..RowSums::default()
-        };
-        let base = t.x.as_ptr().cast::<f64>();
-        for start in (0..list.len()).step_by(8) {
-            let lanes = (list.len() - start).min(8);
-            let valid = (((1u16 << lanes) - 1) & 0xff) as u8;
-            // SAFETY: the masked load reads only the `lanes` entries left in `list`, and every
-            // gather reads only valid lanes, at indices checked against the arrays above.
-            unsafe {
-                let index = _mm256_maskz_loadu_epi32(valid, list.as_ptr().add(start).cast::<i32>());
-                let three = _mm256_add_epi32(_mm256_add_epi32(index, index), index);
-                let gather = |offset: usize| {
-                    _mm512_mask_i32gather_pd::<8>(splat(0.0), valid, three, base.add(offset))
-                };
-                let dx = _mm512_sub_pd(splat(xi.x), gather(0));
-                let dy = _mm512_sub_pd(splat(xi.y), gather(1));
-                let dz = _mm512_sub_pd(splat(xi.z), gather(2));
-                let r2 = _mm512_add_pd(
-                    _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                    _mm512_mul_pd(dz, dz),
-                );
-                let r = _mm512_sqrt_pd(r2);
-                let q = _mm512_mul_pd(r, splat(c.inv_h));
-                let inner = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(q, splat(0.5));
-                let t1 = _mm512_sub_pd(splat(1.0), q);
-                let tw = _mm512_max_pd(t1, splat(0.0));
-                // W: k (6 q q (q - 1) + 1) inside q <= 1/2, k 2 t^3 outside.
-                let w_in = _mm512_mul_pd(
-                    splat(c.k),
-                    _mm512_add_pd(
-                        _mm512_mul_pd(
-                            _mm512_mul_pd(_mm512_mul_pd(splat(6.0), q), q),
-                            _mm512_sub_pd(q, splat(1.0)),
-                        ),
-                        splat(1.0),
+        let (vx, vy, vz) = (
+            simd.mul_f64s(vj, gx),
+            simd.mul_f64s(vj, gy),
+            simd.mul_f64s(vj, gz),
+        );
+        let sq = simd.add_f64s(
+            simd.add_f64s(simd.mul_f64s(vx, vx), simd.mul_f64s(vy, vy)),
+            simd.mul_f64s(vz, vz),
+        );
+        let rate = match t.v {
+            Some(v) => {
+                let dot = simd.add_f64s(
+                    simd.add_f64s(
+                        simd.mul_f64s(gather::<S>(js, |j| v[j].x), gx),
+                        simd.mul_f64s(gather::<S>(js, |j| v[j].y), gy),
                     ),
+                    simd.mul_f64s(gather::<S>(js, |j| v[j].z), gz),
                 );
-                let w_out =
-                    _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(splat(c.k * 2.0), tw), tw), tw);
-                let w = _mm512_mask_blend_pd(inner, w_out, w_in);
-                // dW/dq: l q (3 q - 2) inside, -l t^2 outside; grad W = x dW/dq / (r h).
-                let d_in = _mm512_mul_pd(
-                    _mm512_mul_pd(splat(c.l), q),
-                    _mm512_sub_pd(_mm512_mul_pd(splat(3.0), q), splat(2.0)),
-                );
-                let d_out = _mm512_mul_pd(_mm512_mul_pd(splat(-c.l), t1), t1);
-                let f = _mm512_div_pd(
-                    _mm512_mask_blend_pd(inner, d_out, d_in),
-                    _mm512_mul_pd(r, splat(c.h)),
-                );
-                // Inside the support and apart (a coincident pair has W(0) and no gradient).
-                let near = valid & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(r2, splat(h2));
-                let apart = near & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(r2, splat(tiny));
-                let w = _mm512_maskz_mov_pd(near, w);
-                let f = _mm512_maskz_mov_pd(apart, f);
-                let (gx, gy, gz) = (
-                    _mm512_mul_pd(dx, f),
-                    _mm512_mul_pd(dy, f),
-                    _mm512_mul_pd(dz, f),
-                );
-                let mut rows = [[0f32; 8]; 3];
-                _mm256_storeu_ps(rows[0].as_mut_ptr(), _mm512_cvtpd_ps(gx));
-                _mm256_storeu_ps(rows[1].as_mut_ptr(), _mm512_cvtpd_ps(gy));
-                _mm256_storeu_ps(rows[2].as_mut_ptr(), _mm512_cvtpd_ps(gz));
-                for (l, slot) in out[start..start + lanes].iter_mut().enumerate() {
-                    *slot = [rows[0][l], rows[1][l], rows[2][l]];
-                }
-                let vj = match t.volume {
-                    Volumes::Uniform(v) => splat(v),
-                    Volumes::Each(v) => {
-                        _mm512_mask_i32gather_pd::<8>(splat(0.0), valid, index, v.as_ptr())
-                    }
-                };
-                let (vx, vy, vz) = (
-                    _mm512_mul_pd(vj, gx),
-                    _mm512_mul_pd(vj, gy),
-                    _mm512_mul_pd(vj, gz),
-                );
-                let sq = _mm512_add_pd(
-                    _mm512_add_pd(_mm512_mul_pd(vx, vx), _mm512_mul_pd(vy, vy)),
-                    _mm512_mul_pd(vz, vz),
-                );
-                let rate = match t.v {
-                    Some(v) => {
-                        let vb = v.as_ptr().cast::<f64>();
-                        let gv = |offset: usize| {
-                            _mm512_mask_i32gather_pd::<8>(splat(0.0), valid, three, vb.add(offset))
-                        };
-                        let dot = _mm512_add_pd(
-                            _mm512_add_pd(_mm512_mul_pd(gv(0), gx), _mm512_mul_pd(gv(1), gy)),
-                            _mm512_mul_pd(gv(2), gz),
-                        );
-                        _mm512_mul_pd(vj, dot)
-                    }
-                    None => splat(0.0),
-                };
-                // The sums pair by pair, in the scalar form's order, so that both give the
-                // same densities and factors to the last bit (a different order changes the
-                // run's trajectory at the rounding level).
-                let mut terms = [[0.0; 8]; 6];
-                for (row, term) in
-                    terms
-                        .iter_mut()
-                        .zip([_mm512_mul_pd(vj, w), vx, vy, vz, sq, rate])
-                {
-                    _mm512_storeu_pd(row.as_mut_ptr(), term);
-                }
-                let [w, gx, gy, gz, sq, rate] = &terms;
-                for l in 0..lanes {
-                    sums.w += w[l];
-                    sums.grad += Vec3::new(gx[l], gy[l], gz[l]);
-                    sums.grad_sq += sq[l];
-                    sums.rate += rate[l];
-                }
+                simd.mul_f64s(vj, dot)
             }
+            None => splat(0.0),
+        };
+        let lanes = |v: S::f64s| -> [Real; LANES] { pulp::cast(v) };
+        let (gx, gy, gz) = (lanes(gx), lanes(gy), lanes(gz));
+        let (w, vx, vy, vz) = (lanes(simd.mul_f64s(vj, w)), lanes(vx), lanes(vy), lanes(vz));
+        let (sq, rate) = (lanes(sq), lanes(rate));
+        for (l, slot) in slots.iter_mut().enumerate() {
+            *slot = [gx[l] as f32, gy[l] as f32, gz[l] as f32];
+            sums.w += w[l];
+            sums.grad += Vec3::new(vx[l], vy[l], vz[l]);
+            sums.grad_sq += sq[l];
+            sums.rate += rate[l];
         }
-        sums
     }
+    sums
+}
+
+/// `f` of the [`LANES`] targets `js` (the last one repeated in the lanes past its end).
+#[inline(always)]
+fn gather<S: Simd>(js: &[u32], f: impl Fn(usize) -> Real) -> S::f64s {
+    let lanes: [Real; LANES] = std::array::from_fn(|l| f(js[l.min(js.len() - 1)] as usize));
+    pulp::cast(lanes)
 }
 
 /// Splits `data` (one entry per neighbour, laid out like `lists`) into the parts that belong to
@@ -398,16 +359,37 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
 
-    /// The vector row stores the same gradients and sums as the scalar one, bit for bit, on
-    /// fluid rows (one volume) and wall rows (a volume and a velocity
-    /// each), including a coincident pair, rows of every length from 0 to 40 (partial
-    /// vectors) and pairs beyond the support. (Without AVX-512 on the CPU it does not run.)
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn the_vector_row_matches_the_scalar_row() {
-        if !row::wide_available() {
-            return;
+    /// A row computed at a given level.
+    struct Row<'a> {
+        kernel: KernelConstants,
+        xi: Vec3,
+        t: &'a Targets<'a>,
+        list: &'a [u32],
+        out: &'a mut [Grad32],
+    }
+
+    impl WithSimd for Row<'_> {
+        type Output = RowSums;
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, simd: S) -> RowSums {
+            row(
+                simd,
+                &self.kernel,
+                &self.xi,
+                self.t,
+                self.list,
+                self.out,
+                0.5,
+            )
         }
+    }
+
+    /// At every level the CPU runs, a row stores the gradients of [`CubicSpline::w_grad`]
+    /// and adds its sums pair by pair, bit for bit: on fluid rows (one volume) and wall rows
+    /// (a volume and a velocity each), including a coincident pair, rows of every length from
+    /// 0 to 40 (partial vectors) and pairs beyond the support.
+    #[test]
+    fn every_level_computes_the_kernel_rows_bit_for_bit() {
         let kernel = CubicSpline::new(0.2);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let mut random = || Vec3::new(rng.random(), rng.random(), rng.random()) * 0.5;
@@ -429,14 +411,41 @@ mod tests {
                     v: Some(&v),
                 },
             ] {
-                let (mut a, mut b) = (vec![[0f32; 3]; len], vec![[1f32; 3]; len]);
-                let want = row::scalar(&kernel, &xi, &t, &list, &mut a, 0.5);
-                // SAFETY: the CPU has the feature, checked above.
-                let got = unsafe { row::wide(&kernel, &xi, &t, &list, &mut b, 0.5) };
-                assert_eq!(a, b, "gradients, {len} pairs");
-                assert_eq!(got, want, "sums, {len} pairs");
+                let mut want = RowSums {
+                    w: 0.5,
+                    ..RowSums::default()
+                };
+                let mut grads = Vec::new();
+                for &j in &list {
+                    let j = j as usize;
+                    let (w, g) = kernel.w_grad(&(xi - x[j]));
+                    let vj = match t.volume {
+                        Volumes::Uniform(v) => v,
+                        Volumes::Each(v) => v[j],
+                    };
+                    grads.push([g.x as f32, g.y as f32, g.z as f32]);
+                    let vg = vj * g;
+                    want.w += vj * w;
+                    want.grad += vg;
+                    want.grad_sq += vg.norm_squared();
+                    if let Some(v) = t.v {
+                        want.rate += vj * v[j].dot(&g);
+                    }
+                }
                 if len > 0 {
-                    assert!(want.w > 0.0, "the coincident first pair carries W(0)");
+                    assert!(want.w > 0.5, "the coincident first pair carries W(0)");
+                }
+                for level in Level::ALL.into_iter().filter(|l| l.supported()) {
+                    let mut out = vec![[1f32; 3]; len];
+                    let got = level.run(Row {
+                        kernel: kernel.constants(),
+                        xi,
+                        t: &t,
+                        list: &list,
+                        out: &mut out,
+                    });
+                    assert_eq!(out, grads, "{level:?}: gradients, {len} pairs");
+                    assert_eq!(got, want, "{level:?}: sums, {len} pairs");
                 }
             }
         }

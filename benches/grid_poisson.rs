@@ -95,7 +95,11 @@ fn main() -> Result<(), eddy::grid::SolveError> {
             let g = sphere_scene(n, surface);
             (g.bounds.cell_kinds(), g.bounds.face_fractions([n; 3]))
         });
-        [("pressure", voxels), ("pressure, staircase", staircase), ("pressure, cut cells", cut)]
+        [
+            ("pressure", voxels),
+            ("pressure, staircase", staircase),
+            ("pressure, cut cells", cut),
+        ]
     };
     for (label, (cells, fractions)) in sizes.iter().flat_map(|&n| systems(n)) {
         let n = cells.dim().0;

@@ -69,10 +69,13 @@ pub struct GridParams {
 #[serde(rename_all = "snake_case")]
 pub enum ObstacleSurface {
     /// Each cell is solid or fluid by its centre: the solvers see a staircase, first order.
+    /// The default while the artificial boundary layers are validated on cut cells only by the
+    /// DFG benchmark: the grid sphere wake seeds no vortex particle in its first 12 steps on
+    /// cut cells (`tests/vtk_readers.rs`), where it does on the staircase.
+    #[default]
     Staircase,
     /// Faces weigh their open fraction in the projection and the no-slip wall sits where the
     /// signed distance crosses zero ([`super::cut`]).
-    #[default]
     Cut,
 }
 

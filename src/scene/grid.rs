@@ -44,9 +44,9 @@ pub struct Grid {
     /// What lies beyond each side of the domain (all no-slip walls by default).
     #[serde(default)]
     pub boundary: GridBoundary,
-    /// How the obstacles meet the cells: `cut` (default: the projection weighs each face by its
-    /// open fraction, the no-slip wall sits on the true surface) or `staircase` (each cell solid
-    /// or fluid by its centre).
+    /// How the obstacles meet the cells: `staircase` (default: each cell solid or fluid by its
+    /// centre) or `cut` (the projection weighs each face by its open fraction, the no-slip wall
+    /// sits on the true surface; the DFG scenes use it).
     #[serde(default)]
     pub obstacle_surface: ObstacleSurface,
     /// Carry the last step's pressure gradient into the momentum and project its increment

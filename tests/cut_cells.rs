@@ -2,6 +2,8 @@
 //! gravity holds the hydrostatic pressure to round-off, a probe on its surface reads it, and the
 //! projection around a moving sphere is divergence-free on the fluid's share of every cell.
 
+mod common;
+
 use eddy::grid::GridSolver;
 use eddy::metrics::grid_probes::sample_point;
 use eddy::pipeline::grid_solver;
@@ -94,26 +96,7 @@ fn a_tilted_floor_at_rest_under_gravity_holds_the_hydrostatic_pressure() {
 /// covers entirely carry its velocity, and hundreds of faces are cut.
 #[test]
 fn the_projection_with_cut_cells_is_divergence_free_around_a_moving_sphere() {
-    let s = scene_from(
-        r#"
-        name = "channel"
-        gravity = [0.0, 0.0, 0.0]
-        domain = { min = [0.0, 0.0, 0.0], max = [1.5, 1.0, 1.0] }
-        time = { end = 1.0, cfl = 0.8, dt_max = 0.05 }
-        viscosity = { kinematic = 0.01 }
-        [grid]
-        resolution = [36, 24, 24]
-        pressure_tolerance = 1e-14
-        obstacle_surface = "cut"
-        initial_velocity = [1.0, 0.0, 0.0]
-        boundary = { x_min = { inflow = [1.0, 0.0, 0.0] }, x_max = "open" }
-        [[obstacles]]
-        name = "ball"
-        shape = { type = "sphere", radius = 0.2 }
-        position = [0.6, 0.5, 0.5]
-        motion = { linear = [0.0, 0.3, 0.0] }
-        "#,
-    );
+    let s = scene_from(&common::moving_ball_channel("cut"));
     let mut g = grid_solver(&s).expect("grid builds");
     assert!(
         g.bounds.cut_faces().is_some(),

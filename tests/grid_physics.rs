@@ -2,6 +2,8 @@
 //! incompressibility with obstacles and open sides, solid boundary conditions, Taylor–Green
 //! decay and its convergence order, scalar advection in a rotating field, bad input.
 
+mod common;
+
 use eddy::bench::grid::TaylorGreen;
 use eddy::grid::{advect::advect, fine::FineGrid, GridError, GridSolver, MacGrid};
 use eddy::pipeline::{grid_solver, RunError, RunOptions};
@@ -97,26 +99,7 @@ fn step_divergence_free(g: &mut GridSolver) {
 
 #[test]
 fn projection_is_divergence_free_with_obstacles_and_open_sides() {
-    let s = scene_from(
-        r#"
-        name = "channel"
-        gravity = [0.0, 0.0, 0.0]
-        domain = { min = [0.0, 0.0, 0.0], max = [1.5, 1.0, 1.0] }
-        time = { end = 1.0, cfl = 0.8, dt_max = 0.05 }
-        viscosity = { kinematic = 0.01 }
-        [grid]
-        resolution = [36, 24, 24]
-        pressure_tolerance = 1e-14
-        obstacle_surface = "staircase"
-        initial_velocity = [1.0, 0.0, 0.0]
-        boundary = { x_min = { inflow = [1.0, 0.0, 0.0] }, x_max = "open" }
-        [[obstacles]]
-        name = "ball"
-        shape = { type = "sphere", radius = 0.2 }
-        position = [0.6, 0.5, 0.5]
-        motion = { linear = [0.0, 0.3, 0.0] }
-        "#,
-    );
+    let s = scene_from(&common::moving_ball_channel("staircase"));
     let mut g = grid_solver(&s).expect("grid builds");
     g.set_velocity(|x| {
         Vec3::new(

@@ -151,3 +151,29 @@ pub fn python_with(modules: &[&str]) -> Option<std::path::PathBuf> {
         }
     }
 }
+
+/// A 1.5 x 1 x 1 m channel of 36 x 24 x 24 cells, fed at 1 m/s through x_min and open at x_max,
+/// with a ball of radius 0.2 m crossing it at 0.3 m/s, projected to 1e-14; `surface` is its
+/// `grid.obstacle_surface`.
+pub fn moving_ball_channel(surface: &str) -> String {
+    format!(
+        r#"
+        name = "channel"
+        gravity = [0.0, 0.0, 0.0]
+        domain = {{ min = [0.0, 0.0, 0.0], max = [1.5, 1.0, 1.0] }}
+        time = {{ end = 1.0, cfl = 0.8, dt_max = 0.05 }}
+        viscosity = {{ kinematic = 0.01 }}
+        [grid]
+        resolution = [36, 24, 24]
+        pressure_tolerance = 1e-14
+        obstacle_surface = "{surface}"
+        initial_velocity = [1.0, 0.0, 0.0]
+        boundary = {{ x_min = {{ inflow = [1.0, 0.0, 0.0] }}, x_max = "open" }}
+        [[obstacles]]
+        name = "ball"
+        shape = {{ type = "sphere", radius = 0.2 }}
+        position = [0.6, 0.5, 0.5]
+        motion = {{ linear = [0.0, 0.3, 0.0] }}
+        "#
+    )
+}

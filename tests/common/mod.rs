@@ -155,6 +155,7 @@ pub fn python_with(modules: &[&str]) -> Option<std::path::PathBuf> {
 /// A 1.5 x 1 x 1 m channel of 36 x 24 x 24 cells, fed at 1 m/s through x_min and open at x_max,
 /// with a ball of radius 0.2 m crossing it at 0.3 m/s, projected to 1e-14; `surface` is its
 /// `grid.obstacle_surface`.
+#[allow(dead_code)]
 pub fn moving_ball_channel(surface: &str) -> String {
     format!(
         r#"

@@ -118,6 +118,16 @@ impl<K: WithSimd, S: Simd> NullaryFnOnce for At<K, S> {
     }
 }
 
+/// The squared length x^2 + y^2 + z^2 of each lane's vector, summed in that order (no fused
+/// multiply-add, so every level gives the same bits).
+#[inline(always)]
+pub fn norm2<S: Simd>(simd: S, x: S::f64s, y: S::f64s, z: S::f64s) -> S::f64s {
+    simd.add_f64s(
+        simd.add_f64s(simd.mul_f64s(x, x), simd.mul_f64s(y, y)),
+        simd.mul_f64s(z, z),
+    )
+}
+
 /// The lanes of the f64 mask `m` as the bits of an integer (lane l is bit l).
 #[inline(always)]
 pub fn bits<S: Simd>(m: S::m64s) -> u32 {

@@ -1,7 +1,7 @@
 //! Neighbour search on the compact hashed uniform grid of [`crate::spatial`]: neighbour lists
 //! built in parallel, cell chunk by cell chunk, into one compressed-row (CSR) array of `u32`.
 
-use crate::simd::{bits, pack_indices, Level, LANES};
+use crate::simd::{bits, norm2, pack_indices, Level, LANES};
 use crate::spatial::Cell;
 pub use crate::spatial::{cell_order, cell_order_and_codes, permute, resize, CellGrid};
 use crate::{Real, Vec3};
@@ -249,10 +249,7 @@ fn near<S: Simd>(
                 simd.sub_f64s(py, y),
                 simd.sub_f64s(pz, z),
             );
-            let d2 = simd.add_f64s(
-                simd.add_f64s(simd.mul_f64s(dx, dx), simd.mul_f64s(dy, dy)),
-                simd.mul_f64s(dz, dz),
-            );
+            let d2 = norm2(simd, dx, dy, dz);
             // Within the radius, below `e` and not `skip`, without a branch (an if/else for
             // the range's last vector made the search in the dam-break step 1.7 times slower).
             let near = simd.and_m64s(

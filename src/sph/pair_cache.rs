@@ -21,7 +21,7 @@
 use super::boundary::BoundaryParticles;
 use super::kernel::{CubicSpline, KernelConstants};
 use super::neighbors::NeighborLists;
-use crate::simd::{Level, LANES};
+use crate::simd::{norm2, Level, LANES};
 use crate::{Real, Vec3};
 use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
@@ -252,10 +252,7 @@ fn row<S: Simd>(
         let dx = simd.sub_f64s(splat(xi.x), gather::<S>(js, |j| t.x[j].x));
         let dy = simd.sub_f64s(splat(xi.y), gather::<S>(js, |j| t.x[j].y));
         let dz = simd.sub_f64s(splat(xi.z), gather::<S>(js, |j| t.x[j].z));
-        let r2 = simd.add_f64s(
-            simd.add_f64s(simd.mul_f64s(dx, dx), simd.mul_f64s(dy, dy)),
-            simd.mul_f64s(dz, dz),
-        );
+        let r2 = norm2(simd, dx, dy, dz);
         let r = simd.sqrt_f64s(r2);
         let q = simd.mul_f64s(r, splat(c.inv_h));
         let inner = simd.less_than_or_equal_f64s(q, splat(0.5));
@@ -300,10 +297,7 @@ fn row<S: Simd>(
             simd.mul_f64s(vj, gy),
             simd.mul_f64s(vj, gz),
         );
-        let sq = simd.add_f64s(
-            simd.add_f64s(simd.mul_f64s(vx, vx), simd.mul_f64s(vy, vy)),
-            simd.mul_f64s(vz, vz),
-        );
+        let sq = norm2(simd, vx, vy, vz);
         let rate = match t.v {
             Some(v) => {
                 let dot = simd.add_f64s(

@@ -86,17 +86,6 @@ fn advection_reflection_keeps_energy() {
 /// projection to a tight tolerance every fluid cell's divergence is below 1e-9 |u|_max / dx;
 /// faces touching the sphere carry its velocity and no flux crosses the walls (with cut cells:
 /// `tests/cut_cells.rs`).
-/// One step of `g`, after which every fluid cell's divergence is below 1e-9 |u|max / dx.
-fn step_divergence_free(g: &mut GridSolver) {
-    g.step(None).expect("stable");
-    let umax = g.mac.max_face_speed();
-    let div = eddy::grid::project::max_divergence(&g.mac, &g.bounds);
-    assert!(
-        div < 1e-9 * umax / g.mac.dx,
-        "divergence {div:.3e} at |u| {umax}"
-    );
-}
-
 #[test]
 fn projection_is_divergence_free_with_obstacles_and_open_sides() {
     let s = scene_from(&common::moving_ball_channel("staircase"));
@@ -110,7 +99,7 @@ fn projection_is_divergence_free_with_obstacles_and_open_sides() {
     })
     .expect("projects");
     for _ in 0..3 {
-        step_divergence_free(&mut g);
+        common::step_divergence_free(&mut g);
         let ball = &g.bodies[0];
         let mut touching = 0;
         for a in 0..3 {
@@ -180,7 +169,7 @@ fn inflow_turbulence_drives_the_inflow_faces_and_the_flow_stays_divergence_free(
     let inflow = Vec3::new(1.0, 0.0, 0.0);
     let mut previous: Option<Vec<Real>> = None;
     for _ in 0..4 {
-        step_divergence_free(&mut g);
+        common::step_divergence_free(&mut g);
         let (mut covered, mut open) = (0, Vec::new());
         for ((j, k), &u) in g.mac.u[0].index_axis(ndarray::Axis(0), 0).indexed_iter() {
             let idx = [0, j, k];

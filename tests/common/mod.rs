@@ -178,3 +178,16 @@ pub fn moving_ball_channel(surface: &str) -> String {
         "#
     )
 }
+
+/// One step of `g`, after which every cell with a pressure has a divergence below
+/// 1e-9 |u|max / dx (with cut cells, of the fluid's share of the cell).
+#[allow(dead_code)]
+pub fn step_divergence_free(g: &mut eddy::grid::GridSolver) {
+    g.step(None).expect("stable");
+    let umax = g.mac.max_face_speed();
+    let div = eddy::grid::project::max_divergence(&g.mac, &g.bounds);
+    assert!(
+        div < 1e-9 * umax / g.mac.dx,
+        "divergence {div:.3e} at |u| {umax}"
+    );
+}

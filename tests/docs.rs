@@ -1,6 +1,6 @@
 //! The documentation holds together: the README stays short, every chapter of the book is in
-//! its summary and every summary entry exists, and every local link of the README and the book
-//! reaches a file.
+//! its summary and every summary entry exists, and every local link of the README, ARCHITECTURE.md
+//! and the book reaches a file.
 
 use std::path::{Path, PathBuf};
 
@@ -77,6 +77,7 @@ fn the_summary_lists_every_chapter_and_only_chapters_that_exist() {
 fn every_local_link_reaches_a_file() {
     let mut files = chapters();
     files.push(root().join("README.md"));
+    files.push(root().join("ARCHITECTURE.md"));
     for file in files {
         let text = std::fs::read_to_string(&file).expect("a page");
         for link in local_links(&text) {

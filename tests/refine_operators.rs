@@ -4,12 +4,12 @@
 
 use eddy::pipeline::sph_solver;
 use eddy::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use eddy::refine::lanes::F4;
+use eddy::refine::packed::{Field, Packed, Quantity};
 use eddy::refine::{mcvsph, rankine, vrsph};
 use eddy::scene::{self, Scene};
-use eddy::sph::lanes::F4;
 use eddy::sph::neighbors::cell_order;
 use eddy::sph::operators::{curl_of, per_particle, volumes, Operators, WallField};
-use eddy::sph::packed::{Field, Packed, Quantity};
 use eddy::sph::SphSolver;
 use eddy::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
@@ -123,7 +123,7 @@ fn uniform_flow_has_zero_curl() {
 }
 
 /// The Laplacian of Ye Eq. 8, 10 sum_j V_j (a_ij . x_ij) / (|x_ij|^2 + 0.01 h^2) grad W_ij, as
-/// the refinements take it (packed, f32; `eddy::sph::packed`):
+/// the refinements take it (packed, f32; `eddy::refine::packed`):
 /// - it vanishes on any linear field in the bulk (the summand is even in x_ij, grad W odd), to
 ///   f32 rounding of the sum's terms;
 /// - on quadratic fields it equals Eq. 8 summed directly in f64 with the kernel's own

@@ -13,13 +13,13 @@
 use super::sph::{advance, cube_edge, dam_break_scene, measure_with, BenchOptions};
 use crate::pipeline::{sph_solver, RunError};
 use crate::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
+use crate::refine::lanes::F4;
 use crate::refine::mcvsph::sample_indices;
+use crate::refine::packed::{fill, Field, Packed};
 use crate::refine::vrsph::{stream_function, stream_strength};
 use crate::scene::PressureSolverKind;
-use crate::sph::lanes::F4;
 use crate::sph::neighbors::NeighborLists;
 use crate::sph::operators::{volumes, Operators, WallField};
-use crate::sph::packed::{fill, Field, Packed};
 use crate::sph::SphSolver;
 use crate::{Real, Vec3};
 use std::time::Instant;

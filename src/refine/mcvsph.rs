@@ -33,11 +33,11 @@
 //! instead of O(N_f N) (directly below [`DIRECT_BELOW`] vortex particles, where that is
 //! cheaper); its error is a small fraction of the Monte Carlo error.
 
+use super::lanes::F4;
+use super::packed::{fill, Field, Packed, Quantity};
 use super::{add_scaled, Refiner, StepContext};
-use crate::sph::lanes::F4;
-use crate::sph::neighbors::{permute, resize};
+use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
-use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -11,7 +11,7 @@
 //! (walls hold zero angular velocity). The rotational energy is sum_i m epsilon |omega_i|^2 / 2.
 
 use super::{Refiner, StepContext};
-use crate::sph::neighbors::{permute, resize};
+use crate::spatial::{permute, resize};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
 use rayon::prelude::*;

@@ -16,8 +16,10 @@
 pub mod biot_savart;
 mod clusters;
 pub mod confinement;
+pub mod lanes;
 pub mod mcvsph;
 pub mod micropolar;
+pub mod packed;
 pub mod params;
 pub mod rankine;
 pub mod vrsph;

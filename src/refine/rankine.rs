@@ -30,11 +30,11 @@
 //! beta = 1). The core radius is therefore capped at that bound: below it the method never
 //! gives back more than was lost at any scale, which is the paper's stability argument.
 
+use super::lanes::{CrossSum, F4};
+use super::packed::{Field, Packed, Quantity};
 use super::{Refiner, StepContext};
-use crate::sph::lanes::{CrossSum, F4};
-use crate::sph::neighbors::{permute, resize};
+use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
-use crate::sph::packed::{Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 

@@ -35,11 +35,11 @@
 //! nu = 0 the same vortex gains energy under VRSPH (+30 % in 125 steps, where DFSPH keeps it
 //! within 0.1 %), the over-restoration at the particle scale.
 
+use super::lanes::F4;
+use super::packed::{fill, Field, Packed, Quantity};
 use super::{Refiner, StepContext};
-use crate::sph::lanes::F4;
-use crate::sph::neighbors::{permute, resize};
+use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
-use crate::sph::packed::{fill, Field, Packed, Quantity};
 use crate::{Real, Vec3};
 use std::f64::consts::PI;
 

@@ -15,7 +15,7 @@
 //!
 //! These f64 forms serve the metrics, the micropolar and confinement baselines and the tests;
 //! the Rankine, VRSPH and MCVSPH passes use their single-precision packed twins in
-//! `super::packed` (which also holds the Laplacian), checked against these.
+//! `crate::refine::packed` (which also holds the Laplacian), checked against these.
 //!
 //! **Walls.** With `walls` on, the Akinci boundary samples take part in every sum as neighbours
 //! with their own volume, their kinematic velocity in velocity operators, and zero in the

@@ -1,4 +1,4 @@
-//! The difference operators of `super::operators` in single precision on packed fields: the
+//! The difference operators of `crate::sph::operators` in single precision on packed fields: the
 //! neighbour passes of the Rankine, VRSPH and MCVSPH refinements.
 //!
 //! **Why.** These refinements are a few passes over every pair, and their cost is measured
@@ -22,7 +22,7 @@
 //! **Walls.** Boundary samples enter as in [`Operators`], summed in f64 (they are few).
 
 use super::lanes::{CrossSum, F4};
-use super::operators::{Operators, WallField};
+use crate::sph::operators::{Operators, WallField};
 use crate::Mat3;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -56,14 +56,14 @@ impl Field {
 
     /// Reorders the field as the fluid was reordered (`perm[k]` is the old index at k).
     pub fn permute(&mut self, perm: &[u32]) {
-        super::neighbors::permute(&mut self.0, perm);
+        crate::spatial::permute(&mut self.0, perm);
     }
 
     /// Follows the fluid's open boundaries (see [`crate::spatial::resize`]): new particles
     /// hold zero.
     pub fn resize(&mut self, keep: &[bool], added: usize) {
         let zero = F4::from_vec(&Vec3::zeros(), 0.0);
-        super::neighbors::resize(&mut self.0, keep, added, zero);
+        crate::spatial::resize(&mut self.0, keep, added, zero);
     }
 }
 
@@ -101,7 +101,7 @@ fn below(a: Vec3, floor: Real) -> Vec3 {
 /// **Noise floor.** Components of a packed field below 1e-12 of the step's largest fluid
 /// speed U (times 1/h for a vorticity, h for a stream function, h the support) are packed as
 /// zero. In a fluid at rest the fields are rounding noise, and their products with the
-/// near-zero gradient components of lattice-aligned pairs (`super::pair_cache`) fall below
+/// near-zero gradient components of lattice-aligned pairs (`crate::sph::pair_cache`) fall below
 /// f32's normal range; x86 computes subnormal results in microcode. At the second step of the
 /// dam break VRSPH's passes took 104–118 ms without the floor and 70–80 ms with it (389k
 /// particles). The floor is four orders above f64 rounding and five below f32's resolution

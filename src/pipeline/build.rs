@@ -4,15 +4,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use super::coupling::{SurfaceExchange, SurfacePressure};
 use super::footprint::{available_memory, Footprint};
 use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames, VortexValues};
+use super::order;
 use super::simulation::{Simulation, StepError};
-use super::stages::{
-    GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
-    StepRecord, TaylorGreenDecay,
-};
-use super::turbulence::{GridTurbulence, SphTurbulence};
+use super::stages::{Stage, StepRecord};
 use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::{GridError, GridSolver};
@@ -20,7 +16,7 @@ use crate::io::read_velocity;
 use crate::io::{write_includes, write_links, AttrValue, IoError, VtkOptions};
 use crate::metrics::Probe;
 use crate::refine;
-use crate::scene::{build, InitialFlow, Scene};
+use crate::scene::{build, Scene};
 use crate::sph::SphSolver;
 use crate::stepping::towards_end;
 use crate::{Real, Vec3};
@@ -250,133 +246,43 @@ fn probes_in_the_fluid(scene: &Scene, bodies: &[RigidBody]) -> Result<(), RunErr
     Ok(())
 }
 
+/// Admission: a scene with something to simulate, its probes in the fluid, and a memory
+/// estimate under what the machine has. Returns the scene's bodies (meshes are read here, once,
+/// for the estimate and both solvers) and the estimate.
+fn admit(scene: &Scene) -> Result<(Vec<RigidBody>, Footprint), RunError> {
+    if scene.fluid.is_none() && scene.grid.is_none() {
+        return Err(RunError::Unsupported(format!(
+            "scene '{}' has neither [fluid] nor [grid]: nothing to simulate",
+            scene.name
+        )));
+    }
+    let bodies = build::bodies(scene)?;
+    probes_in_the_fluid(scene, &bodies)?;
+    let footprint = Footprint::of(scene, &bodies);
+    if let Some(available) = available_memory().filter(|&a| footprint.bytes > a) {
+        return Err(RunError::TooLarge {
+            scene: scene.name.clone(),
+            footprint,
+            available,
+        });
+    }
+    Ok((bodies, footprint))
+}
+
 impl Pipeline {
     /// Builds the solvers and stages of `scene`. Nothing is written.
     pub fn build(scene: &Scene) -> Result<Self, RunError> {
+        let (bodies, footprint) = admit(scene)?;
         let (has_sph, has_grid) = (scene.fluid.is_some(), scene.grid.is_some());
-        if !has_sph && !has_grid {
-            return Err(RunError::Unsupported(format!(
-                "scene '{}' has neither [fluid] nor [grid]: nothing to simulate",
-                scene.name
-            )));
-        }
-        // Built once (meshes are read here) for the estimate and both solvers.
-        let bodies = build::bodies(scene)?;
-        probes_in_the_fluid(scene, &bodies)?;
-        let footprint = Footprint::of(scene, &bodies);
-        if let Some(available) = available_memory().filter(|&a| footprint.bytes > a) {
-            return Err(RunError::TooLarge {
-                scene: scene.name.clone(),
-                footprint,
-                available,
-            });
-        }
         let both = has_sph && has_grid;
         let sph = has_sph
             .then(|| sph_among(scene, bodies.clone()))
             .transpose()?;
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let mut sim = Simulation::new(sph, grid);
-        let mut stages: Vec<Box<dyn Stage>> = Vec::new();
-        // The grid's turbulence in a scene with a grid, the fluid's in a scene with a fluid;
-        // a coupled scene has both, each seeded and synthesised in its own medium (an
-        // uncoupled scene with both drives the grid).
-        let coupled = scene.coupling.is_some() && has_sph && has_grid;
-        let (mut grid_turbulence, mut sph_turbulence): (Option<Box<dyn Stage>>, _) = (None, None);
-        if let Some(settings) = build::abl_settings(scene) {
-            let shapes: Vec<_> = scene
-                .container
-                .iter()
-                .chain(&scene.obstacles)
-                .map(|b| b.shape.clone())
-                .collect();
-            if let Some(grid) = scene.grid.as_ref() {
-                grid_turbulence = Some(Box::new(GridTurbulence::build(
-                    settings.clone(),
-                    &mut sim,
-                    &shapes,
-                    grid.advection,
-                )?));
-            }
-            if has_sph && (coupled || !has_grid) {
-                let stage: Box<dyn Stage> =
-                    Box::new(SphTurbulence::build(settings, &mut sim, &shapes)?);
-                sph_turbulence = Some(stage);
-            }
-        }
-        let probes = &scene.probes;
-        let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
-        if sim.sph.is_some() && !probes.is_empty() {
-            stages.push(Box::new(SphProbes {
-                probes: probes.clone(),
-                file: Kind::Particles.file("probes.csv", both),
-                recorder: None,
-            }));
-        }
-        if sim.grid.is_some() && probes.iter().any(|p| per_step(&p)) {
-            let offset = usize::from(scene.container.is_some());
-            let bodies = scene
-                .obstacles
-                .iter()
-                .enumerate()
-                .filter_map(|(i, b)| b.name.clone().map(|n| (n, i + offset)))
-                .collect();
-            stages.push(Box::new(GridProbes {
-                probes: probes.iter().filter(per_step).cloned().collect(),
-                bodies,
-                file: Kind::Grid.file("probes.csv", both),
-                recorder: None,
-            }));
-        }
-        match scene.coupling.clone().filter(|_| coupled) {
-            // The water is the air's boundary for the step, the air's pressure on it is known
-            // after the grid's projection, and both reach the particles before they move.
-            Some(coupling) => {
-                stages.push(Box::new(SurfaceExchange { coupling }));
-                stages.extend(grid_turbulence);
-                stages.push(Box::new(GridStep));
-                stages.push(Box::new(SurfacePressure));
-                stages.extend(sph_turbulence);
-                stages.push(Box::new(SphStep));
-                stages.push(Box::new(SphNeighbours));
-            }
-            None => {
-                if sim.sph.is_some() {
-                    stages.extend(sph_turbulence);
-                    stages.push(Box::new(SphStep));
-                    stages.push(Box::new(SphNeighbours));
-                }
-                if sim.grid.is_some() {
-                    stages.extend(grid_turbulence);
-                    stages.push(Box::new(GridStep));
-                }
-            }
-        }
-        if sim.sph.is_some() && !scene.output.metrics.is_empty() {
-            stages.push(Box::new(SphMetrics {
-                metrics: scene.output.metrics.clone(),
-                gravity: Vec3::from(scene.gravity),
-                file: Kind::Particles.file("metrics.csv", both),
-                recorder: None,
-            }));
-        }
-        if sim.grid.is_some() {
-            let taylor_green = scene
-                .grid
-                .as_ref()
-                .is_some_and(|g| g.initial_flow == Some(InitialFlow::TaylorGreen))
-                .then_some(TaylorGreenDecay {
-                    nu: scene.viscosity.kinematic,
-                    initial_energy: 0.0,
-                });
-            stages.push(Box::new(GridMetrics {
-                file: Kind::Grid.file("metrics.csv", both),
-                csv: None,
-                taylor_green,
-                coupled,
-            }));
-        }
-        let profiles = probes
+        let stages = order::stages(scene, &mut sim)?;
+        let profiles = scene
+            .probes
             .iter()
             .filter_map(|p| match p {
                 Probe::Line {

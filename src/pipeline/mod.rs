@@ -12,6 +12,7 @@ mod coupling;
 mod driver;
 mod footprint;
 mod frames;
+mod order;
 mod plan;
 mod simulation;
 mod stages;

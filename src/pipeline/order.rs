@@ -1,0 +1,188 @@
+//! The order of a step's stages, one function per kind of scene. [`stages`] builds the stages
+//! a scene needs (each is `None` when nothing asks for it) and hands them to the ordering of
+//! its kind; a stage that is not built does not run, and `--plan` prints the list as ordered
+//! here. A new stage is its own file plus one line in the ordering functions that run it.
+
+use super::coupling::{SurfaceExchange, SurfacePressure};
+use super::frames::Kind;
+use super::simulation::Simulation;
+use super::stages::{
+    GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
+    TaylorGreenDecay,
+};
+use super::turbulence::{GridTurbulence, SphTurbulence};
+use super::RunError;
+use crate::metrics::Probe;
+use crate::scene::{build, Coupling, InitialFlow, Scene};
+use crate::Vec3;
+
+type Built = Option<Box<dyn Stage>>;
+
+/// The stages one scene needs, before they are ordered.
+struct StageSet {
+    sph_probes: Built,
+    grid_probes: Built,
+    /// Pfaff et al. Figure 9, lines 1–25, on the grid's cells.
+    grid_turbulence: Built,
+    /// The same lines on the particles.
+    sph_turbulence: Built,
+    sph_metrics: Built,
+    grid_metrics: Built,
+}
+
+/// The stages of `scene`, in the order a step runs them.
+pub fn stages(scene: &Scene, sim: &mut Simulation) -> Result<Vec<Box<dyn Stage>>, RunError> {
+    let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
+    let coupling = scene.coupling.clone().filter(|_| has_sph && has_grid);
+    let set = StageSet::build(scene, sim, coupling.is_some())?;
+    let order = match (coupling, has_sph, has_grid) {
+        (Some(coupling), _, _) => coupled(set, coupling),
+        (None, true, true) => side_by_side(set),
+        (None, true, false) => sph(set),
+        (None, false, _) => grid(set),
+    };
+    Ok(order.into_iter().flatten().collect())
+}
+
+/// A grid scene: Figure 9's turbulence (lines 1–25), then the grid's own step (line 28).
+fn grid(s: StageSet) -> Vec<Built> {
+    vec![
+        s.grid_probes,
+        s.grid_turbulence,
+        Some(Box::new(GridStep)),
+        s.grid_metrics,
+    ]
+}
+
+/// An SPH scene: the turbulence on the particles, the solver's step (its refinements run
+/// inside, as step hooks), then the neighbourhood of the new positions.
+fn sph(s: StageSet) -> Vec<Built> {
+    vec![
+        s.sph_probes,
+        s.sph_turbulence,
+        Some(Box::new(SphStep)),
+        Some(Box::new(SphNeighbours)),
+        s.sph_metrics,
+    ]
+}
+
+/// A fluid and a grid that do not exchange anything: each steps as in its own scene (the
+/// turbulence drives the grid).
+fn side_by_side(s: StageSet) -> Vec<Built> {
+    vec![
+        s.sph_probes,
+        s.grid_probes,
+        s.sph_turbulence,
+        Some(Box::new(SphStep)),
+        Some(Box::new(SphNeighbours)),
+        s.grid_turbulence,
+        Some(Box::new(GridStep)),
+        s.sph_metrics,
+        s.grid_metrics,
+    ]
+}
+
+/// Air on the grid over water in SPH (`super::coupling`): the water is the air's boundary for
+/// the step, the air's pressure on it is known after the grid's projection, and both reach the
+/// particles before they move.
+fn coupled(s: StageSet, coupling: Coupling) -> Vec<Built> {
+    vec![
+        s.sph_probes,
+        s.grid_probes,
+        Some(Box::new(SurfaceExchange { coupling })),
+        s.grid_turbulence,
+        Some(Box::new(GridStep)),
+        Some(Box::new(SurfacePressure)),
+        s.sph_turbulence,
+        Some(Box::new(SphStep)),
+        Some(Box::new(SphNeighbours)),
+        s.sph_metrics,
+        s.grid_metrics,
+    ]
+}
+
+impl StageSet {
+    /// Builds what `scene` asks for. The grid's turbulence in a scene with a grid, the fluid's
+    /// in a scene with a fluid; a coupled scene has both, each seeded and synthesised in its
+    /// own medium (an uncoupled scene with both drives the grid).
+    fn build(scene: &Scene, sim: &mut Simulation, coupled: bool) -> Result<Self, RunError> {
+        let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
+        let both = has_sph && has_grid;
+        let (mut grid_turbulence, mut sph_turbulence): (Built, Built) = (None, None);
+        if let Some(settings) = build::abl_settings(scene) {
+            let shapes: Vec<_> = scene
+                .container
+                .iter()
+                .chain(&scene.obstacles)
+                .map(|b| b.shape.clone())
+                .collect();
+            if let Some(grid) = scene.grid.as_ref() {
+                grid_turbulence = Some(Box::new(GridTurbulence::build(
+                    settings.clone(),
+                    sim,
+                    &shapes,
+                    grid.advection,
+                )?));
+            }
+            if has_sph && (coupled || !has_grid) {
+                sph_turbulence = Some(Box::new(SphTurbulence::build(settings, sim, &shapes)?));
+            }
+        }
+        let probes = &scene.probes;
+        let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
+        let sph_probes: Built = (has_sph && !probes.is_empty()).then(|| {
+            Box::new(SphProbes {
+                probes: probes.clone(),
+                file: Kind::Particles.file("probes.csv", both),
+                recorder: None,
+            }) as Box<dyn Stage>
+        });
+        let grid_probes: Built = (has_grid && probes.iter().any(|p| per_step(&p))).then(|| {
+            let offset = usize::from(scene.container.is_some());
+            let bodies = scene
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter_map(|(i, b)| b.name.clone().map(|n| (n, i + offset)))
+                .collect();
+            Box::new(GridProbes {
+                probes: probes.iter().filter(per_step).cloned().collect(),
+                bodies,
+                file: Kind::Grid.file("probes.csv", both),
+                recorder: None,
+            }) as Box<dyn Stage>
+        });
+        let sph_metrics: Built = (has_sph && !scene.output.metrics.is_empty()).then(|| {
+            Box::new(SphMetrics {
+                metrics: scene.output.metrics.clone(),
+                gravity: Vec3::from(scene.gravity),
+                file: Kind::Particles.file("metrics.csv", both),
+                recorder: None,
+            }) as Box<dyn Stage>
+        });
+        let grid_metrics: Built = has_grid.then(|| {
+            let taylor_green = scene
+                .grid
+                .as_ref()
+                .is_some_and(|g| g.initial_flow == Some(InitialFlow::TaylorGreen))
+                .then_some(TaylorGreenDecay {
+                    nu: scene.viscosity.kinematic,
+                    initial_energy: 0.0,
+                });
+            Box::new(GridMetrics {
+                file: Kind::Grid.file("metrics.csv", both),
+                csv: None,
+                taylor_green,
+                coupled,
+            }) as Box<dyn Stage>
+        });
+        Ok(Self {
+            sph_probes,
+            grid_probes,
+            grid_turbulence,
+            sph_turbulence,
+            sph_metrics,
+            grid_metrics,
+        })
+    }
+}

@@ -11,5 +11,6 @@ fn main() -> Result<(), eddy::pipeline::RunError> {
         mcvsph_error: false,
         passes: false,
         floors: true,
+        threads: Vec::new(),
     })
 }

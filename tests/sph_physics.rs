@@ -498,3 +498,33 @@ fn the_recorded_pressure_is_the_one_that_holds_the_fluid() {
         );
     }
 }
+
+/// A run does not depend on the thread count: the dam break of the benchmark (a 12^3 block, the
+/// first 8 steps of its collapse) ends with the same positions to the bit on pools of 1, 2 and
+/// 3 threads, with DFSPH and with IISPH. Every sum of the step runs in an order fixed by
+/// the data (`eddy::parallel`, the per-particle passes), which is what makes a seed reproduce a
+/// run on another machine, and what `eddy bench --threads` checks at benchmark sizes.
+#[test]
+fn a_run_is_the_same_on_every_thread_count() {
+    use eddy::bench::sph::{advance, dam_break_scene};
+    use eddy::scene::PressureSolverKind;
+    for solver in [PressureSolverKind::Dfsph, PressureSolverKind::Iisph] {
+        let bits: Vec<Vec<u64>> = [1, 2, 3]
+            .into_iter()
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a thread pool");
+                pool.install(|| {
+                    let mut sph = sph_solver(&dam_break_scene(12, solver)).expect("solver");
+                    advance(&mut sph, 8).expect("steps");
+                    let moved = sph.fluid.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+                    assert!(moved > 0.1, "{solver:?}: the block falls ({moved} m/s)");
+                    sph.fluid.x.iter().flat_map(|x| x.iter().map(|c| c.to_bits())).collect()
+                })
+            })
+            .collect();
+        assert!(bits.windows(2).all(|w| w[0] == w[1]), "{solver:?}");
+    }
+}

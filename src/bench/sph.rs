@@ -37,6 +37,9 @@ pub struct BenchOptions {
     /// Also print each phase of the DFSPH step against its data-movement floor
     /// (see [`super::floors`]).
     pub floors: bool,
+    /// Also time every size and solver on thread pools of these sizes (strong scaling); empty
+    /// for none.
+    pub threads: Vec<usize>,
 }
 
 /// One measured configuration.
@@ -196,6 +199,70 @@ fn time_neighbor_search(sph: &SphSolver) -> f64 {
     seconds
 }
 
+/// Strong scaling: each size and solver on a pool of each thread count of `args.threads`, the
+/// same steps from the same start. The step's sums run in a fixed order (`crate::parallel`,
+/// the solvers' per-particle passes), so every pool must end in the same state to the bit;
+/// the table says whether it did.
+fn scaling(args: &BenchOptions) -> Result<(), RunError> {
+    println!(
+        "\nStrong scaling, {} warm-up + {} timed steps (efficiency: the first row's time x its \
+         threads over this row's)",
+        args.warmup, args.steps
+    );
+    println!(
+        "{:<6} {:>9} {:>8} {:>10} {:>9} {:>11} {:>11}",
+        "solver", "fluid", "threads", "ms/step", "speed-up", "efficiency", "same state"
+    );
+    for &size in &args.sizes {
+        for name in &args.solvers {
+            let solver = solver_kind(name)?;
+            let mut first: Option<(usize, f64, Vec<u64>)> = None;
+            for &threads in &args.threads {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| RunError::Unsupported(format!("--threads {threads}: {e}")))?;
+                let (r, state) = pool.install(|| -> Result<_, RunError> {
+                    let mut sph = sph_solver(&dam_break_scene(cube_edge(size), solver))?;
+                    advance(&mut sph, args.warmup)?;
+                    let r = measure_solver(&mut sph, solver, args.steps)?;
+                    let state: Vec<u64> = sph
+                        .fluid
+                        .x
+                        .iter()
+                        .flat_map(|x| x.iter().map(|c| c.to_bits()))
+                        .collect();
+                    Ok((r, state))
+                })?;
+                let (t0, ms0, state0) =
+                    first.get_or_insert((threads, r.ms_per_step, state.clone()));
+                println!(
+                    "{:<6} {:>9} {:>8} {:>10.1} {:>9.2} {:>10.0}% {:>11}",
+                    name,
+                    r.fluid,
+                    threads,
+                    r.ms_per_step,
+                    *ms0 / r.ms_per_step,
+                    100.0 * (*t0 as f64 * *ms0) / (threads as f64 * r.ms_per_step),
+                    if *state0 == state { "yes" } else { "NO" }
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The pressure solver named `name` on the command line.
+fn solver_kind(name: &str) -> Result<PressureSolverKind, RunError> {
+    match name {
+        "dfsph" => Ok(PressureSolverKind::Dfsph),
+        "iisph" => Ok(PressureSolverKind::Iisph),
+        other => Err(RunError::Unsupported(format!(
+            "--solvers: unknown solver '{other}' (allowed: dfsph, iisph)"
+        ))),
+    }
+}
+
 /// Peak resident memory of this process, bytes (Linux; None elsewhere).
 pub fn peak_rss() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -230,15 +297,7 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
     for &size in &args.sizes {
         let edge = cube_edge(size);
         for name in &args.solvers {
-            let solver = match name.as_str() {
-                "dfsph" => PressureSolverKind::Dfsph,
-                "iisph" => PressureSolverKind::Iisph,
-                other => {
-                    return Err(RunError::Unsupported(format!(
-                        "--solvers: unknown solver '{other}' (allowed: dfsph, iisph)"
-                    )))
-                }
-            };
+            let solver = solver_kind(name)?;
             let mut sph = sph_solver(&dam_break_scene(edge, solver))?;
             advance(&mut sph, args.warmup)?;
             let r = measure_solver(&mut sph, solver, args.steps)?;
@@ -261,6 +320,9 @@ pub fn run(args: &BenchOptions) -> Result<(), RunError> {
                 super::floors::print(&sph, &r, super::floors::read_bandwidth());
             }
         }
+    }
+    if !args.threads.is_empty() {
+        scaling(args)?;
     }
     super::refine::run(args)?;
     if let Some(rss) = peak_rss() {

@@ -40,6 +40,11 @@ pub struct BenchArgs {
     /// bandwidth.
     #[arg(long)]
     pub floors: bool,
+    /// Also time each size and solver on thread pools of these sizes (e.g. 1,2,4,8,16): strong
+    /// scaling, each pool's speed-up and parallel efficiency against the first, and whether
+    /// every pool ended in the same state to the bit (it must: the sums run in a fixed order).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u64).range(1..256))]
+    pub threads: Vec<u64>,
 }
 
 impl From<BenchArgs> for BenchOptions {
@@ -53,6 +58,7 @@ impl From<BenchArgs> for BenchOptions {
             mcvsph_error: a.mcvsph_error,
             passes: a.passes,
             floors: a.floors,
+            threads: a.threads.into_iter().map(|t| t as usize).collect(),
         }
     }
 }

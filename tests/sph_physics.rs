@@ -521,7 +521,11 @@ fn a_run_is_the_same_on_every_thread_count() {
                     advance(&mut sph, 8).expect("steps");
                     let moved = sph.fluid.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
                     assert!(moved > 0.1, "{solver:?}: the block falls ({moved} m/s)");
-                    sph.fluid.x.iter().flat_map(|x| x.iter().map(|c| c.to_bits())).collect()
+                    sph.fluid
+                        .x
+                        .iter()
+                        .flat_map(|x| x.iter().map(|c| c.to_bits()))
+                        .collect()
                 })
             })
             .collect();

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::footprint::{available_memory, Footprint};
 use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames, VortexValues};
-use super::order;
+use super::order::{self, SceneKind};
 use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
 use super::RunError;
@@ -26,6 +26,8 @@ pub struct Pipeline {
     /// The memory estimate the scene was admitted with.
     pub footprint: Footprint,
     pub sim: Simulation,
+    /// Which solvers the scene runs and whether they exchange anything.
+    pub kind: SceneKind,
     pub stages: Vec<Box<dyn Stage>>,
     pub frames: Frames,
     /// Grid line probes, written as `profile_NAME.csv` at the end: (name, from, to, points).
@@ -280,7 +282,7 @@ impl Pipeline {
             .transpose()?;
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let mut sim = Simulation::new(sph, grid);
-        let stages = order::stages(scene, &mut sim)?;
+        let (kind, stages) = order::stages(scene, &mut sim)?;
         let profiles = scene
             .probes
             .iter()
@@ -318,6 +320,7 @@ impl Pipeline {
         Ok(Self {
             footprint,
             sim,
+            kind,
             stages,
             frames,
             profiles,

@@ -25,6 +25,7 @@ pub use coupling::{Exchange, DRAG_HEIGHT};
 pub use driver::{run_scene, Run};
 pub use footprint::{available_memory, Footprint};
 pub use frames::{GridFrames, Kind, ParticleFrames};
+pub use order::SceneKind;
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
 pub use stages::{Stage, StepRecord};

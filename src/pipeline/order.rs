@@ -18,6 +18,19 @@ use crate::Vec3;
 
 type Built = Option<Box<dyn Stage>>;
 
+/// The kinds of scene, each with its own order of stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneKind {
+    /// A MAC grid alone.
+    Grid,
+    /// SPH particles alone.
+    Sph,
+    /// A grid and SPH particles on one clock, exchanging nothing.
+    SideBySide,
+    /// Air on the grid over water in SPH, exchanging momentum across the surface.
+    Coupled,
+}
+
 /// The stages one scene needs, before they are ordered.
 struct StageSet {
     sph_probes: Built,
@@ -30,18 +43,21 @@ struct StageSet {
     grid_metrics: Built,
 }
 
-/// The stages of `scene`, in the order a step runs them.
-pub fn stages(scene: &Scene, sim: &mut Simulation) -> Result<Vec<Box<dyn Stage>>, RunError> {
+/// The kind of `scene` and its stages, in the order a step runs them.
+pub fn stages(
+    scene: &Scene,
+    sim: &mut Simulation,
+) -> Result<(SceneKind, Vec<Box<dyn Stage>>), RunError> {
     let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
     let coupling = scene.coupling.clone().filter(|_| has_sph && has_grid);
     let set = StageSet::build(scene, sim, coupling.is_some())?;
-    let order = match (coupling, has_sph, has_grid) {
-        (Some(coupling), _, _) => coupled(set, coupling),
-        (None, true, true) => side_by_side(set),
-        (None, true, false) => sph(set),
-        (None, false, _) => grid(set),
+    let (kind, order) = match (coupling, has_sph, has_grid) {
+        (Some(coupling), _, _) => (SceneKind::Coupled, coupled(set, coupling)),
+        (None, true, true) => (SceneKind::SideBySide, side_by_side(set)),
+        (None, true, false) => (SceneKind::Sph, sph(set)),
+        (None, false, _) => (SceneKind::Grid, grid(set)),
     };
-    Ok(order.into_iter().flatten().collect())
+    Ok((kind, order.into_iter().flatten().collect()))
 }
 
 /// A grid scene: Figure 9's turbulence (lines 1–25), then the grid's own step (line 28).

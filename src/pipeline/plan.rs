@@ -5,6 +5,7 @@ use std::fmt;
 
 use super::build::Pipeline;
 use super::footprint::available_memory;
+use super::order::SceneKind;
 
 /// One stage of a step, with the parts it runs inside.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -53,20 +54,23 @@ impl Plan {
                 "average.vti: the time-averaged grid velocity, at the end".into(),
             ));
         }
-        let coupled = p.stages.iter().any(|s| s.name() == "coupling");
-        let clock = match (p.sim.sph.is_some(), p.sim.grid.is_some()) {
-            (true, true) if coupled => "one dt for both solvers, the smaller of their stable \
+        let clock = match p.kind {
+            SceneKind::Coupled => "one dt for both solvers, the smaller of their stable \
                                         steps; the water and the air exchange momentum across \
                                         the surface each step (stages coupling and surface \
                                         pressure)"
                 .to_owned(),
-            (true, true) => "one dt for both solvers, the smaller of their stable steps; no \
+            SceneKind::SideBySide => {
+                "one dt for both solvers, the smaller of their stable steps; no \
                              exchange between the grid and the SPH fluid (each moves in its own \
                              part of the scene; add [coupling] for the exchange)"
-                .to_owned(),
-            _ => "dt from the solver's stable step (CFL or fixed), the last steps shortened to \
+                    .to_owned()
+            }
+            SceneKind::Grid | SceneKind::Sph => {
+                "dt from the solver's stable step (CFL or fixed), the last steps shortened to \
                   land on the end time"
-                .to_owned(),
+                    .to_owned()
+            }
         };
         let memory = match available_memory() {
             Some(a) => format!(

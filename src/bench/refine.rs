@@ -206,11 +206,11 @@ fn floor_pass<const F: usize>(
 fn vrsph_pass_table(edge: usize, warmup: u64, steps: u64) -> Result<(), RunError> {
     let (sph, step_ms, nu) = warmed_dam_break(edge, warmup, steps)?;
     let volume = volumes(sph.fluid.mass, &sph.fluid.density);
-    let scene = dam_break_scene(edge, PressureSolverKind::Dfsph);
+    // Fluid-only operators, VRSPH's default (`refinement.walls = false`).
     let ops = Operators {
         nb: sph.neighborhood(),
         volume: &volume,
-        walls: scene.refinement.walls(),
+        walls: false,
     };
     let (lists, grads) = (ops.nb.fluid, Some(ops.nb.pairs.fluid.as_flattened()));
     let count = sph.fluid.len();

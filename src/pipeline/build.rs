@@ -184,7 +184,7 @@ fn sph_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<SphSolver, RunErro
     let params = build::sph_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name)))?;
     let refinement = |n| {
-        refine::hook(&scene.refinement, n, scene.seed)
+        refine::build(&scene.refinement, n, scene.seed)
             .into_iter()
             .collect()
     };

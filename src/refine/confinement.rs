@@ -4,7 +4,7 @@
 //! and so strengthens them; it cannot create vortices, which is why the papers compare
 //! against it. Where eta vanishes there is no direction and no force.
 
-use super::{Refiner, StepContext};
+use super::{StepContext, StepHook};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -12,16 +12,31 @@ use rayon::prelude::*;
 /// Confinement with strength epsilon, m/s.
 pub struct Confinement {
     epsilon: Real,
+    /// Boundary samples take part in the operators.
+    walls: bool,
 }
 
 impl Confinement {
-    pub fn new(epsilon: Real) -> Self {
-        Self { epsilon }
+    pub fn new(epsilon: Real, walls: bool) -> Self {
+        Self { epsilon, walls }
     }
 }
 
-impl Refiner for Confinement {
-    fn permute(&mut self, _perm: &[u32]) {}
+impl StepHook for Confinement {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        super::plan_line(
+            format!("vorticity confinement, epsilon = {} m/s", self.epsilon),
+            self.walls,
+        )
+    }
+
+    fn walls(&self) -> bool {
+        self.walls
+    }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], accel: &mut [Vec3]) {
         if self.epsilon == 0.0 {

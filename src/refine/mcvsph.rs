@@ -35,7 +35,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::{add_scaled, Refiner, StepContext};
+use super::{add_scaled, StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
 use crate::{Real, Vec3};
@@ -50,6 +50,8 @@ pub struct Mcvsph {
     volume_coefficient: Real,
     /// Opening parameter of the Biot–Savart treecode.
     theta: Real,
+    /// Boundary samples take part in the operators.
+    walls: bool,
     /// Whether each fluid particle carries a vortex particle.
     sampled: Vec<bool>,
     /// The fraction sampled, and the generator that samples particles entering at an inflow.
@@ -72,7 +74,14 @@ pub struct Mcvsph {
 impl Mcvsph {
     /// Draws round(`fraction` n) vortex particles (at least one) among `n` fluid particles;
     /// `theta` is the treecode's opening parameter.
-    pub fn new(n: usize, fraction: Real, volume_coefficient: Real, theta: Real, seed: u64) -> Self {
+    pub fn new(
+        n: usize,
+        fraction: Real,
+        volume_coefficient: Real,
+        theta: Real,
+        seed: u64,
+        walls: bool,
+    ) -> Self {
         let count = ((fraction * n as Real).round() as usize).clamp(1.min(n), n);
         let mut sampled = vec![false; n];
         for i in sample_indices(n, count, seed) {
@@ -81,6 +90,7 @@ impl Mcvsph {
         Self {
             volume_coefficient,
             theta,
+            walls,
             sampled,
             fraction,
             rng: ChaCha8Rng::seed_from_u64(seed ^ INFLOW_STREAM),
@@ -117,7 +127,28 @@ pub fn sample_indices(n: usize, count: usize, seed: u64) -> Vec<usize> {
     rand::seq::index::sample(&mut rng, n, count).into_vec()
 }
 
-impl Refiner for Mcvsph {
+impl StepHook for Mcvsph {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        super::plan_line(
+            format!(
+                "MCVSPH (Ye et al., Alg. 2) after the pressure solve, {} % vortex particles, \
+                 c = {}, treecode theta = {}",
+                100.0 * self.fraction,
+                self.volume_coefficient,
+                self.theta
+            ),
+            self.walls,
+        )
+    }
+
+    fn walls(&self) -> bool {
+        self.walls
+    }
+
     fn permute(&mut self, perm: &[u32]) {
         permute(&mut self.sampled, perm);
     }

@@ -10,7 +10,7 @@
 //! micro-inertia cannot make the step unstable. Both curls are the shared difference curls
 //! (walls hold zero angular velocity). The rotational energy is sum_i m epsilon |omega_i|^2 / 2.
 
-use super::{Refiner, StepContext};
+use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
@@ -20,21 +20,42 @@ use rayon::prelude::*;
 pub struct Micropolar {
     nu_t: Real,
     inertia: Real,
+    /// Boundary samples take part in the operators.
+    walls: bool,
     /// Angular velocity per fluid particle, rad/s.
     omega: Vec<Vec3>,
 }
 
 impl Micropolar {
-    pub fn new(n: usize, nu_t: Real, inertia: Real) -> Self {
+    pub fn new(n: usize, nu_t: Real, inertia: Real, walls: bool) -> Self {
         Self {
             nu_t,
             inertia,
+            walls,
             omega: vec![Vec3::zeros(); n],
         }
     }
 }
 
-impl Refiner for Micropolar {
+impl StepHook for Micropolar {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        super::plan_line(
+            format!(
+                "micropolar (Wang et al. 2020 Eq. 16) nu_t = {}, micro-inertia = {} m^2",
+                self.nu_t, self.inertia
+            ),
+            self.walls,
+        )
+    }
+
+    fn walls(&self) -> bool {
+        self.walls
+    }
+
     fn permute(&mut self, perm: &[u32]) {
         permute(&mut self.omega, perm);
     }

@@ -134,18 +134,6 @@ impl Refinement {
         }
     }
 
-    /// Whether boundary samples take part in the difference operators.
-    pub fn walls(&self) -> bool {
-        match self {
-            Refinement::None => false,
-            Refinement::Rankine { walls, .. }
-            | Refinement::Vrsph { walls, .. }
-            | Refinement::Mcvsph { walls, .. }
-            | Refinement::Micropolar { walls, .. }
-            | Refinement::Confinement { walls, .. } => *walls,
-        }
-    }
-
     /// Checks every parameter against its allowed range; errors name the key.
     pub fn validate(&self) -> Result<(), InvalidParam> {
         let check = |key: &str, value: Real, lo: Real, hi: Real, lo_open: bool, hi_open: bool| {
@@ -210,45 +198,5 @@ impl Refinement {
                 check("epsilon", epsilon, 0.0, Real::INFINITY, false, true)
             }
         }
-    }
-
-    /// One line for `eddy run --plan`, or None for `none`.
-    pub fn plan_line(&self) -> Option<String> {
-        let walls = if self.walls() {
-            "walls in the operators"
-        } else {
-            "fluid-only operators"
-        };
-        let what = match *self {
-            Refinement::None => return None,
-            Refinement::Rankine { beta, .. } => {
-                format!("Rankine vortex (Wang et al. 2020, Alg. 1) before advection, beta = {beta}")
-            }
-            Refinement::Vrsph { alpha, .. } => format!(
-                "VRSPH (Liu et al. 2021, Alg. 2) after the divergence solve, alpha = {alpha}"
-            ),
-            Refinement::Mcvsph {
-                sample_fraction,
-                volume_coefficient,
-                theta,
-                ..
-            } => format!(
-                "MCVSPH (Ye et al., Alg. 2) after the pressure solve, {} % vortex particles, \
-                 c = {volume_coefficient}, treecode theta = {theta}",
-                100.0 * sample_fraction
-            ),
-            Refinement::Micropolar {
-                nu_t,
-                micro_inertia,
-                ..
-            } => format!(
-                "micropolar (Wang et al. 2020 Eq. 16) nu_t = {nu_t}, micro-inertia = \
-                 {micro_inertia} m^2"
-            ),
-            Refinement::Confinement { epsilon, .. } => {
-                format!("vorticity confinement, epsilon = {epsilon} m/s")
-            }
-        };
-        Some(format!("{what}; {walls}"))
     }
 }

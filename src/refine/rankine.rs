@@ -32,7 +32,7 @@
 
 use super::lanes::{CrossSum, F4};
 use super::packed::{Field, Packed, Quantity};
-use super::{Refiner, StepContext};
+use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
 use crate::{Real, Vec3};
@@ -44,6 +44,8 @@ pub const OSEEN: Real = 1.25643;
 /// Rankine refinement with core-radius factor beta.
 pub struct Rankine {
     beta: Real,
+    /// Boundary samples take part in the operators.
+    walls: bool,
     /// omega^(n-1), per fluid particle; empty before the first step.
     previous: Vec<Vec3>,
     /// Buffers of one step (kept for their memory): the lost vorticity omega^(n-1) -
@@ -55,9 +57,10 @@ pub struct Rankine {
 }
 
 impl Rankine {
-    pub fn new(beta: Real) -> Self {
+    pub fn new(beta: Real, walls: bool) -> Self {
         Self {
             beta,
+            walls,
             previous: Vec::new(),
             lost: Vec::new(),
             positions: Vec::new(),
@@ -67,7 +70,25 @@ impl Rankine {
     }
 }
 
-impl Refiner for Rankine {
+impl StepHook for Rankine {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        super::plan_line(
+            format!(
+                "Rankine vortex (Wang et al. 2020, Alg. 1) before advection, beta = {}",
+                self.beta
+            ),
+            self.walls,
+        )
+    }
+
+    fn walls(&self) -> bool {
+        self.walls
+    }
+
     fn permute(&mut self, perm: &[u32]) {
         if self.previous.len() == perm.len() {
             permute(&mut self.previous, perm);
@@ -81,6 +102,7 @@ impl Refiner for Rankine {
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {
         let Self {
             beta,
+            walls: _,
             previous,
             lost,
             positions,

@@ -37,7 +37,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::{Refiner, StepContext};
+use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
 use crate::{Real, Vec3};
@@ -46,6 +46,8 @@ use std::f64::consts::PI;
 /// VRSPH with gain alpha.
 pub struct Vrsph {
     alpha: Real,
+    /// Boundary samples take part in the operators.
+    walls: bool,
     /// zeta^n = curl v^n per fluid particle, packed (its Laplacian reads it at neighbours);
     /// empty before the first step.
     zeta: Field,
@@ -60,9 +62,10 @@ pub struct Vrsph {
 }
 
 impl Vrsph {
-    pub fn new(alpha: Real) -> Self {
+    pub fn new(alpha: Real, walls: bool) -> Self {
         Self {
             alpha,
+            walls,
             zeta: Field::default(),
             stretch: Vec::new(),
             positions: Vec::new(),
@@ -73,7 +76,25 @@ impl Vrsph {
     }
 }
 
-impl Refiner for Vrsph {
+impl StepHook for Vrsph {
+    fn name(&self) -> &'static str {
+        "refine"
+    }
+
+    fn describe(&self) -> String {
+        super::plan_line(
+            format!(
+                "VRSPH (Liu et al. 2021, Alg. 2) after the divergence solve, alpha = {}",
+                self.alpha
+            ),
+            self.walls,
+        )
+    }
+
+    fn walls(&self) -> bool {
+        self.walls
+    }
+
     fn permute(&mut self, perm: &[u32]) {
         if self.zeta.len() == perm.len() {
             self.zeta.permute(perm);
@@ -89,6 +110,7 @@ impl Refiner for Vrsph {
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {
         let Self {
             alpha,
+            walls: _,
             zeta,
             stretch,
             positions,

@@ -181,3 +181,29 @@ fn the_drag_of_a_cut_cylinder_converges_at_better_than_first_order() {
     );
     assert!((c[2] / 5.58 - 1.0).abs() < 0.03, "c_D {}", c[2]);
 }
+
+/// The CFL step reads the flow's speed, not the velocity of a sliver of a face: past a sphere
+/// in a 1 m/s stream on cut cells (the demo's wake, 16 cells across the sphere), the speed the
+/// CFL rule reads after three steps is within 5 % of potential flow's peak at the equator,
+/// 1.5 m/s (1.446 measured). The largest face speed sits on a partly covered face and runs
+/// above it (1.63 m/s, 9 % over, on a face 11.7 % open); bounding the step by it made the
+/// steps 10 % shorter.
+#[test]
+fn the_cfl_step_reads_the_flow_speed_past_a_cut_sphere() {
+    let scene = scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/abl_sphere_wake.toml"),
+        &["grid.obstacle_surface=\"cut\"".to_owned()],
+    )
+    .expect("the scene loads");
+    let mut grid = grid_solver(&scene).expect("the grid builds");
+    let mut last = None;
+    for _ in 0..3 {
+        last = Some(grid.step(None).expect("a step"));
+    }
+    let stats = last.expect("three steps");
+    let speed = stats.cfl * grid.mac.dx / stats.dt;
+    assert!(
+        (speed / 1.5 - 1.0).abs() < 0.05,
+        "the CFL rule reads {speed:.4} m/s"
+    );
+}

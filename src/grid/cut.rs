@@ -20,6 +20,10 @@ use crate::{Point3, Real, Vec3};
 /// sliver and carry a velocity only the pressure solve defines.
 pub const MIN_OPEN: f32 = 0.01;
 
+/// Partly covered faces less open than this do not bound the CFL step
+/// ([`CutFaces::cfl_speed`]).
+pub const CFL_MIN_OPEN: f32 = 0.5;
+
 /// Distance far from every obstacle (the nodes no obstacle's box reaches).
 const FAR: f32 = f32::MAX;
 
@@ -79,6 +83,39 @@ impl CutFaces {
     /// How many obstacles cut the cells (the last ones of the solver's bodies).
     pub fn bodies(&self) -> usize {
         self.bodies
+    }
+
+    /// The largest |face velocity| of `grid` over the faces that bound the CFL step: every face
+    /// but the partly covered ones less than [`CFL_MIN_OPEN`] open. The projection leaves the
+    /// flux through a sliver of a face right, and its velocity (the flux over the open area)
+    /// runs above the flow's: past a sphere in a 1 m/s stream the largest face speed was
+    /// 1.63 m/s, on a face 11.7 % open, against 1.47 over the faces at least half open (a
+    /// sphere in potential flow peaks at 1.5) and 1.43 on the staircase, and it shortened the
+    /// steps by 10 %. Covered faces count, with the body's velocity, as on the staircase. NaN
+    /// if any face counted is not a number, as [`MacGrid::max_face_speed`].
+    pub fn cfl_speed(&self, grid: &MacGrid) -> Real {
+        let nan_max = |a: Real, b: Real| {
+            if a.is_nan() || b.is_nan() {
+                Real::NAN
+            } else {
+                a.max(b)
+            }
+        };
+        (0..3)
+            .map(|a| {
+                Zip::from(&grid.u[a]).and(&self.open[a]).par_fold(
+                    || 0.0,
+                    |m, &u, &open| {
+                        if open > 0.0 && open < CFL_MIN_OPEN {
+                            m
+                        } else {
+                            nan_max(m, u.abs())
+                        }
+                    },
+                    nan_max,
+                )
+            })
+            .fold(0.0, nan_max)
     }
 
     /// The open fractions as the pressure system takes them: per axis, of the face between

@@ -262,7 +262,7 @@ impl GridSolver {
     /// Advances by `dt`, which should not exceed [`Self::stable_dt`].
     pub fn advance(&mut self, dt: Real) -> Result<GridStepStats, GridError> {
         let started = Instant::now();
-        let speed = self.mac.max_face_speed();
+        let speed = self.cfl_speed();
         let mut stats = GridStepStats {
             dt,
             cfl: speed * dt / self.mac.dx,
@@ -638,7 +638,7 @@ impl GridSolver {
     /// (at most `dt_max`), or the fixed step. Errs when the CFL rule needs less than `dt_min`.
     pub fn stable_dt(&self) -> Result<Real, GridError> {
         let s = &self.params.limits;
-        let speed = self.mac.max_face_speed();
+        let speed = self.cfl_speed();
         let dt = s.fixed_dt.unwrap_or_else(|| {
             if speed > 0.0 {
                 (s.cfl * self.mac.dx / speed).min(s.dt_max)
@@ -760,6 +760,15 @@ impl GridSolver {
             time: self.time,
             step: self.step,
             source,
+        }
+    }
+
+    /// The face speed the CFL rule reads: the largest, except on cut cells the partly covered
+    /// faces less than half open ([`super::cut::CutFaces::cfl_speed`]).
+    fn cfl_speed(&self) -> Real {
+        match self.bounds.cut_faces() {
+            Some(cut) => cut.cfl_speed(&self.mac),
+            None => self.mac.max_face_speed(),
         }
     }
 

@@ -235,7 +235,7 @@ fn scaling(args: &BenchOptions) -> Result<(), RunError> {
                     Ok((r, state))
                 })?;
                 let (t0, ms0, state0) =
-                    first.get_or_insert((threads, r.ms_per_step, state.clone()));
+                    first.get_or_insert_with(|| (threads, r.ms_per_step, state.clone()));
                 println!(
                     "{:<6} {:>9} {:>8} {:>10.1} {:>9.2} {:>10.0}% {:>11}",
                     name,

@@ -16,6 +16,7 @@ use crate::refine::biot_savart::{biot_savart, BiotSavartTree, DEFAULT_THETA};
 use crate::refine::lanes::F4;
 use crate::refine::mcvsph::sample_indices;
 use crate::refine::packed::{fill, Field, Packed};
+use crate::refine::registry;
 use crate::refine::vrsph::{stream_function, stream_strength};
 use crate::scene::PressureSolverKind;
 use crate::sph::neighbors::NeighborLists;
@@ -24,19 +25,17 @@ use crate::sph::SphSolver;
 use crate::{Real, Vec3};
 use std::time::Instant;
 
-/// Methods the table accepts.
-const METHODS: [&str; 5] = ["rankine", "vrsph", "mcvsph", "micropolar", "confinement"];
-
 /// Prints the tables `args` asks for (none without `--refinements` or `--mcvsph-error`).
 pub fn run(args: &BenchOptions) -> Result<(), RunError> {
     if let Some(bad) = args
         .refinements
         .iter()
-        .find(|m| !METHODS.contains(&m.as_str()))
+        .find(|m| registry::find(m).is_none())
     {
+        let names: Vec<&str> = registry::methods().iter().map(|m| m.name).collect();
         return Err(RunError::Unsupported(format!(
             "--refinements: unknown method '{bad}' (allowed: {})",
-            METHODS.join(", ")
+            names.join(", ")
         )));
     }
     if !args.refinements.is_empty() {

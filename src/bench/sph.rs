@@ -25,8 +25,8 @@ pub struct BenchOptions {
     pub warmup: u64,
     /// Timed steps.
     pub steps: u64,
-    /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
-    /// micropolar,confinement), at their paper defaults; see `super::refine`.
+    /// Also time these refinement methods (names of `crate::refine::registry`) on DFSPH
+    /// against plain DFSPH, at their paper defaults; see `super::refine`.
     pub refinements: Vec<String>,
     /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
     /// particles at the smallest size.

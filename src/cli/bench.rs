@@ -8,6 +8,16 @@ use eddy::bench::coupling::CouplingBenchOptions;
 use eddy::bench::grid::GridBenchOptions;
 use eddy::bench::BenchOptions;
 
+/// The refinement methods of the registry, as `--refinements` accepts and its help lists them.
+fn refinement_names() -> clap::builder::PossibleValuesParser {
+    let methods = eddy::refine::registry::methods();
+    clap::builder::PossibleValuesParser::new(
+        methods
+            .into_iter()
+            .map(|m| clap::builder::PossibleValue::new(m.name).help(m.summary)),
+    )
+}
+
 /// Options of `eddy bench`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BenchArgs {
@@ -23,9 +33,8 @@ pub struct BenchArgs {
     /// Timed steps.
     #[arg(long, default_value_t = 30)]
     pub steps: u64,
-    /// Also time these refinements on DFSPH against plain DFSPH (e.g. rankine,vrsph,mcvsph,
-    /// micropolar,confinement), at their paper defaults.
-    #[arg(long, value_delimiter = ',')]
+    /// Also time these refinements on DFSPH against plain DFSPH, at their paper defaults.
+    #[arg(long, value_delimiter = ',', value_parser = refinement_names())]
     pub refinements: Vec<String>,
     /// Also print MCVSPH's Biot–Savart error against run time for 0.1 % to 10 % vortex
     /// particles at the smallest size.

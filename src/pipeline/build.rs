@@ -15,7 +15,6 @@ use crate::grid::{GridError, GridSolver};
 use crate::io::read_velocity;
 use crate::io::{write_includes, write_links, AttrValue, IoError, VtkOptions};
 use crate::metrics::Probe;
-use crate::refine;
 use crate::scene::{build, Scene};
 use crate::sph::SphSolver;
 use crate::stepping::towards_end;
@@ -183,11 +182,7 @@ pub fn grid_solver(scene: &Scene) -> Result<GridSolver, RunError> {
 fn sph_among(scene: &Scene, bodies: Vec<RigidBody>) -> Result<SphSolver, RunError> {
     let params = build::sph_params(scene)
         .ok_or_else(|| RunError::Unsupported(format!("scene '{}' has no [fluid]", scene.name)))?;
-    let refinement = |n| {
-        refine::build(&scene.refinement, n, scene.seed)
-            .into_iter()
-            .collect()
-    };
+    let refinement = |n| scene.refinement.build(n, scene.seed).into_iter().collect();
     Ok(SphSolver::with_hooks(&params, bodies, refinement))
 }
 

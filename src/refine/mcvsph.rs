@@ -35,6 +35,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
+use super::registry::{check, Method, MethodParams, RangeError};
 use super::{add_scaled, StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
@@ -42,10 +43,78 @@ use crate::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::biot_savart::{biot_savart, BiotSavartTree};
 
 /// MCVSPH state.
+/// `method = "mcvsph"`.
+pub const METHOD: Method = Method::new::<Params>(
+    "mcvsph",
+    "Monte Carlo vortical SPH (Ye et al., Algorithm 2)",
+);
+
+/// The keys of `method = "mcvsph"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Fraction N / N_f of fluid particles paired with vortex particles, in (0, 1].
+    #[serde(default = "default_sample_fraction")]
+    pub sample_fraction: Real,
+    /// Volume coefficient c of the vortex particles (Eq. 24), in [0, 1).
+    #[serde(default = "default_volume_coefficient")]
+    pub volume_coefficient: Real,
+    /// Opening parameter of the Biot–Savart treecode, in [0, 1): its error grows about as
+    /// theta^2 and its cost falls; 0 sums every pair directly.
+    #[serde(default = "default_theta")]
+    pub theta: Real,
+    /// Boundary samples take part in its operators (see `super::params`).
+    #[serde(default)]
+    pub walls: bool,
+}
+
+/// Ye et al. Sec. 5.1.1: about 1 % of the fluid particles.
+fn default_sample_fraction() -> Real {
+    0.01
+}
+/// Ye et al. Figs. 5, 8, 13.
+fn default_volume_coefficient() -> Real {
+    0.05
+}
+/// Under 1 % of the signal from the direct sum on the dam break (`super::biot_savart`).
+fn default_theta() -> Real {
+    super::biot_savart::DEFAULT_THETA
+}
+
+impl MethodParams for Params {
+    fn validate(&self) -> Result<(), RangeError> {
+        check(
+            "sample_fraction",
+            self.sample_fraction,
+            (0.0, true),
+            (1.0, false),
+        )?;
+        check(
+            "volume_coefficient",
+            self.volume_coefficient,
+            (0.0, false),
+            (1.0, true),
+        )?;
+        check("theta", self.theta, (0.0, false), (1.0, true))
+    }
+
+    fn build(&self, n: usize, seed: u64) -> Box<dyn StepHook> {
+        Box::new(Mcvsph::new(
+            n,
+            self.sample_fraction,
+            self.volume_coefficient,
+            self.theta,
+            seed,
+            self.walls,
+        ))
+    }
+}
+
 pub struct Mcvsph {
     volume_coefficient: Real,
     /// Opening parameter of the Biot–Savart treecode.

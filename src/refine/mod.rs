@@ -1,6 +1,7 @@
 //! SPH turbulence refinements on top of DFSPH or IISPH. Each is a step hook of the solver
 //! ([`StepHook`], the one trait: `crate::sph::hooks`), and says itself what it does in the plan
-//! and whether walls take part in its operators.
+//! and whether walls take part in its operators. The methods, and how to add one, are in
+//! [`registry`].
 //!
 //! The solver calls a refinement at two points of its step:
 //!
@@ -23,6 +24,7 @@ pub mod micropolar;
 pub mod packed;
 pub mod params;
 pub mod rankine;
+pub mod registry;
 pub mod vrsph;
 
 pub use crate::sph::hooks::StepContext;
@@ -30,37 +32,6 @@ pub use params::{InvalidParam, Refinement};
 
 pub use crate::sph::hooks::StepHook;
 use crate::{Real, Vec3};
-
-/// The refinement a scene asks for, for `n` fluid particles, as a step hook of the SPH
-/// solver; None for `none`.
-pub fn build(cfg: &Refinement, n: usize, seed: u64) -> Option<Box<dyn StepHook>> {
-    Some(match *cfg {
-        Refinement::None => return None,
-        Refinement::Rankine { beta, walls } => Box::new(rankine::Rankine::new(beta, walls)),
-        Refinement::Vrsph { alpha, walls } => Box::new(vrsph::Vrsph::new(alpha, walls)),
-        Refinement::Mcvsph {
-            sample_fraction,
-            volume_coefficient,
-            theta,
-            walls,
-        } => Box::new(mcvsph::Mcvsph::new(
-            n,
-            sample_fraction,
-            volume_coefficient,
-            theta,
-            seed,
-            walls,
-        )),
-        Refinement::Micropolar {
-            nu_t,
-            micro_inertia,
-            walls,
-        } => Box::new(micropolar::Micropolar::new(n, nu_t, micro_inertia, walls)),
-        Refinement::Confinement { epsilon, walls } => {
-            Box::new(confinement::Confinement::new(epsilon, walls))
-        }
-    })
-}
 
 /// A refinement's line for `eddy run --plan`: what it does, then whether walls take part in
 /// its operators.

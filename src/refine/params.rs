@@ -1,5 +1,5 @@
-//! The refinements' parameters, as the scene's `[refinement]` section writes them: which SPH
-//! turbulence refinement runs, its parameters with the papers' defaults, and their validation.
+//! The scene's `[refinement]` section: which SPH turbulence refinement runs (a method of
+//! [`super::registry`]) with its parameters, read, validated and written back.
 //!
 //! ```toml
 //! [refinement]
@@ -8,7 +8,8 @@
 //! walls = false
 //! ```
 //!
-//! Each method takes only its own keys (any other key is an error). `walls` (every method but
+//! Each method takes only its own keys (any other key is an error); `none` takes only `walls`,
+//! which a sweep across methods may set for all and which it ignores. `walls` (every method but
 //! `none`, default false) lets the Akinci boundary samples into the shared difference operators
 //! (see `crate::sph::operators`). The default is off because all three papers keep the walls
 //! out of the vorticity: Wang et al. (Sec. 4.3) found the vorticity field unstable near rigid,
@@ -19,8 +20,13 @@
 //! step as a source. With `walls = true` the wall shear counts, which models no-slip walls;
 //! pair it with `viscosity.boundary > 0`.
 
-use serde::{Deserialize, Serialize};
+use std::fmt;
 
+use serde::de::{Error as _, Unexpected};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use super::registry::{self, Method, Stored};
+use super::StepHook;
 use crate::Real;
 
 /// A refinement parameter outside its allowed range: the dotted key, the value and what is
@@ -33,170 +39,129 @@ pub struct InvalidParam {
     pub allowed: String,
 }
 
-/// The refinement of a scene and its parameters.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Refinement {
-    /// Plain DFSPH / IISPH.
-    #[default]
-    None,
-    /// Wang et al. 2020 (Algorithm 1): Rankine-vortex velocity refinement.
-    Rankine {
-        /// Core-radius factor beta in [0, 1]: r_c = beta sqrt(4 alpha_Oseen nu dt) (Eq. 11).
-        #[serde(default = "one")]
-        beta: Real,
-        #[serde(default)]
-        walls: bool,
-    },
-    /// Liu et al. 2021 (Algorithm 2): vorticity refinement through a local stream function.
-    Vrsph {
-        /// Gain alpha of the velocity refinement (Eq. 17), in [0, 2]; 1 is the ideal refinement.
-        #[serde(default = "one")]
-        alpha: Real,
-        #[serde(default)]
-        walls: bool,
-    },
-    /// Ye et al. (Algorithm 2): Monte Carlo vortical SPH.
-    Mcvsph {
-        /// Fraction N / N_f of fluid particles paired with vortex particles, in (0, 1].
-        #[serde(default = "default_sample_fraction")]
-        sample_fraction: Real,
-        /// Volume coefficient c of the vortex particles (Eq. 24), in [0, 1).
-        #[serde(default = "default_volume_coefficient")]
-        volume_coefficient: Real,
-        /// Opening parameter of the Biot–Savart treecode, in [0, 1): its error grows about as
-        /// theta^2 and its cost falls; 0 sums every pair directly.
-        #[serde(default = "default_theta")]
-        theta: Real,
-        #[serde(default)]
-        walls: bool,
-    },
-    /// Micropolar SPH (Bender et al. 2019, as summarised by Wang et al. 2020 Eq. 16).
-    Micropolar {
-        /// Transfer coefficient nu_t, m^2/s, in [0, 1].
-        #[serde(default = "default_nu_t")]
-        nu_t: Real,
-        /// Micro-inertia per unit mass epsilon, m^2, > 0.
-        #[serde(default = "default_micro_inertia")]
-        micro_inertia: Real,
-        #[serde(default)]
-        walls: bool,
-    },
-    /// Vorticity confinement in SPH form: a = epsilon (N x omega), N = grad|omega| / |grad|omega||.
-    Confinement {
-        /// Confinement strength epsilon, m/s, >= 0.
-        #[serde(default = "default_epsilon")]
-        epsilon: Real,
-        #[serde(default)]
-        walls: bool,
-    },
+/// The refinement of a scene and its parameters; the default is none (plain DFSPH or IISPH).
+#[derive(Clone, Default)]
+pub struct Refinement(Option<Chosen>);
+
+/// A method and its parameters.
+struct Chosen {
+    method: &'static Method,
+    params: Box<dyn Stored>,
 }
 
-fn one() -> Real {
-    1.0
-}
-/// Ye et al. Sec. 5.1.1: about 1 % of the fluid particles.
-fn default_sample_fraction() -> Real {
-    0.01
-}
-/// Ye et al. Figs. 5, 8, 13.
-fn default_volume_coefficient() -> Real {
-    0.05
-}
-/// Under 1 % of the signal from the direct sum on the dam break (`crate::refine::biot_savart`).
-fn default_theta() -> Real {
-    super::biot_savart::DEFAULT_THETA
-}
-/// Wang et al. Sec. 5 and Liu et al. Sec. 5: nu_t = 0.05 matches beta = 1 and alpha = 1.
-fn default_nu_t() -> Real {
-    0.05
-}
-/// No paper gives one; 0.01 m^2 relaxes omega towards curl(v) / 2 in epsilon / (2 nu_t) = 0.1 s
-/// at the default nu_t.
-fn default_micro_inertia() -> Real {
-    0.01
-}
-/// No paper gives one; 0.1 m/s gives about 0.1 g at a vorticity of 10 / s.
-fn default_epsilon() -> Real {
-    0.1
+impl Clone for Chosen {
+    fn clone(&self) -> Self {
+        Self {
+            method: self.method,
+            params: self.params.clone_box(),
+        }
+    }
 }
 
 impl Refinement {
-    /// The method's name as written in scene files.
+    /// The method's name as written in scene files (`none` for none).
     pub fn method(&self) -> &'static str {
-        match self {
-            Refinement::None => "none",
-            Refinement::Rankine { .. } => "rankine",
-            Refinement::Vrsph { .. } => "vrsph",
-            Refinement::Mcvsph { .. } => "mcvsph",
-            Refinement::Micropolar { .. } => "micropolar",
-            Refinement::Confinement { .. } => "confinement",
-        }
+        self.0.as_ref().map_or("none", |c| c.method.name)
+    }
+
+    /// Whether no refinement runs.
+    pub fn is_none(&self) -> bool {
+        self.0.is_none()
     }
 
     /// Checks every parameter against its allowed range; errors name the key.
     pub fn validate(&self) -> Result<(), InvalidParam> {
-        let check = |key: &str, value: Real, lo: Real, hi: Real, lo_open: bool, hi_open: bool| {
-            let inside = value.is_finite()
-                && (if lo_open { value > lo } else { value >= lo })
-                && (if hi_open { value < hi } else { value <= hi });
-            if inside {
-                return Ok(());
-            }
-            let allowed = if hi.is_infinite() {
-                format!("a finite number {} {lo}", if lo_open { ">" } else { ">=" })
-            } else {
-                format!(
-                    "a finite number in {}{lo}, {hi}{}",
-                    if lo_open { '(' } else { '[' },
-                    if hi_open { ')' } else { ']' }
-                )
-            };
-            Err(InvalidParam {
-                key: format!("refinement.{key}"),
-                value,
-                allowed: format!("{allowed} for method \"{}\"", self.method()),
-            })
+        let Some(chosen) = &self.0 else {
+            return Ok(());
         };
-        match *self {
-            Refinement::None => Ok(()),
-            Refinement::Rankine { beta, .. } => check("beta", beta, 0.0, 1.0, false, false),
-            Refinement::Vrsph { alpha, .. } => check("alpha", alpha, 0.0, 2.0, false, false),
-            Refinement::Mcvsph {
-                sample_fraction,
-                volume_coefficient,
-                theta,
-                ..
-            } => {
-                check("sample_fraction", sample_fraction, 0.0, 1.0, true, false)?;
-                check(
-                    "volume_coefficient",
-                    volume_coefficient,
-                    0.0,
-                    1.0,
-                    false,
-                    true,
-                )?;
-                check("theta", theta, 0.0, 1.0, false, true)
-            }
-            Refinement::Micropolar {
-                nu_t,
-                micro_inertia,
-                ..
-            } => {
-                check("nu_t", nu_t, 0.0, 1.0, false, false)?;
-                check(
-                    "micro_inertia",
-                    micro_inertia,
-                    0.0,
-                    Real::INFINITY,
-                    true,
-                    true,
-                )
-            }
-            Refinement::Confinement { epsilon, .. } => {
-                check("epsilon", epsilon, 0.0, Real::INFINITY, false, true)
-            }
+        chosen.params.validate().map_err(|e| InvalidParam {
+            key: format!("refinement.{}", e.key),
+            value: e.value,
+            allowed: format!("{} for method \"{}\"", e.allowed, chosen.method.name),
+        })
+    }
+
+    /// The step hook for `n` fluid particles; None for none.
+    pub fn build(&self, n: usize, seed: u64) -> Option<Box<dyn StepHook>> {
+        self.0.as_ref().map(|c| c.params.build(n, seed))
+    }
+}
+
+impl PartialEq for Refinement {
+    fn eq(&self, other: &Self) -> bool {
+        match (&self.0, &other.0) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.method.name == b.method.name && a.params.same_as(&*b.params),
+            _ => false,
         }
+    }
+}
+
+impl fmt::Debug for Refinement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0 {
+            None => f.write_str("Refinement(none)"),
+            Some(c) => write!(f, "Refinement({}, {:?})", c.method.name, c.params),
+        }
+    }
+}
+
+/// `method = "..."` first, then the method's keys in its struct's order.
+impl Serialize for Refinement {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Tagged<'a> {
+            method: &'a str,
+            #[serde(flatten)]
+            params: Option<&'a dyn erased_serde::Serialize>,
+        }
+        let params = self
+            .0
+            .as_ref()
+            .map(|c| &*c.params as &dyn erased_serde::Serialize);
+        Tagged {
+            method: self.method(),
+            params,
+        }
+        .serialize(serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for Refinement {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let mut keys = toml::Table::deserialize(deserializer)?;
+        let name = match keys.remove("method") {
+            Some(toml::Value::String(name)) => name,
+            Some(other) => {
+                let shown = other.to_string();
+                return Err(D::Error::invalid_type(
+                    Unexpected::Other(&shown),
+                    &"a method name",
+                ));
+            }
+            None => return Err(D::Error::missing_field("method")),
+        };
+        if name == "none" {
+            return match keys.keys().find(|k| *k != "walls") {
+                Some(key) => Err(D::Error::custom(format!(
+                    "unknown field `{key}`, method \"none\" takes no parameters"
+                ))),
+                None => Ok(Self(None)),
+            };
+        }
+        let Some(method) = registry::find(&name) else {
+            let names: Vec<String> = std::iter::once("none")
+                .chain(registry::methods().iter().map(|m| m.name))
+                .map(|n| format!("`{n}`"))
+                .collect();
+            return Err(D::Error::custom(format!(
+                "unknown method `{name}`, expected one of {}",
+                names.join(", ")
+            )));
+        };
+        let params = method
+            .parse(keys)
+            .map_err(|e| D::Error::custom(e.message()))?;
+        Ok(Self(Some(Chosen { method, params })))
     }
 }

@@ -32,11 +32,45 @@
 
 use super::lanes::{CrossSum, F4};
 use super::packed::{Field, Packed, Quantity};
+use super::registry::{check, Method, MethodParams, RangeError};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// `method = "rankine"`.
+pub const METHOD: Method = Method::new::<Params>(
+    "rankine",
+    "Rankine vortex refinement (Wang et al. 2020, Algorithm 1)",
+);
+
+/// The keys of `method = "rankine"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Core-radius factor beta in [0, 1]: r_c = beta sqrt(4 alpha_Oseen nu dt) (Eq. 11).
+    #[serde(default = "one")]
+    pub beta: Real,
+    /// Boundary samples take part in its operators (see `super::params`).
+    #[serde(default)]
+    pub walls: bool,
+}
+
+fn one() -> Real {
+    1.0
+}
+
+impl MethodParams for Params {
+    fn validate(&self) -> Result<(), RangeError> {
+        check("beta", self.beta, (0.0, false), (1.0, false))
+    }
+
+    fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
+        Box::new(Rankine::new(self.beta, self.walls))
+    }
+}
 
 /// The Oseen parameter of the Lamb–Oseen core growth, r_c = sqrt(4 alpha nu t) (Eq. 10).
 pub const OSEEN: Real = 1.25643;

@@ -37,13 +37,47 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
+use super::registry::{check, Method, MethodParams, RangeError};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
 use crate::{Real, Vec3};
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// VRSPH with gain alpha.
+/// `method = "vrsph"`.
+pub const METHOD: Method = Method::new::<Params>(
+    "vrsph",
+    "vorticity refinement through a stream function (Liu et al. 2021, Algorithm 2)",
+);
+
+/// The keys of `method = "vrsph"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Gain alpha of the velocity refinement (Eq. 17), in [0, 2]; 1 is the ideal refinement.
+    #[serde(default = "one")]
+    pub alpha: Real,
+    /// Boundary samples take part in its operators (see `super::params`).
+    #[serde(default)]
+    pub walls: bool,
+}
+
+fn one() -> Real {
+    1.0
+}
+
+impl MethodParams for Params {
+    fn validate(&self) -> Result<(), RangeError> {
+        check("alpha", self.alpha, (0.0, false), (2.0, false))
+    }
+
+    fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
+        Box::new(Vrsph::new(self.alpha, self.walls))
+    }
+}
+
 pub struct Vrsph {
     alpha: Real,
     /// Boundary samples take part in the operators.

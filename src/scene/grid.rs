@@ -363,7 +363,7 @@ impl Scene {
                 c.motion(&format!("{key}.motion"), &source.motion)?;
             }
         }
-        if self.refinement != super::Refinement::None && self.fluid.is_none() {
+        if !self.refinement.is_none() && self.fluid.is_none() {
             return Err(c.invalid(
                 "refinement.method",
                 format!("{:?}", self.refinement.method()),

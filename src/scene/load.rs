@@ -299,7 +299,9 @@ fn locate(text: &str, span: std::ops::Range<usize>, message: &str) -> (String, O
     };
     if let DeValue::Table(table) = found.value {
         let named = quoted_name(message, "unknown field ");
-        let variant = quoted_name(message, "unknown variant ");
+        // A tag's value: serde's enums say "variant", the refinement registry "method".
+        let variant = quoted_name(message, "unknown variant ")
+            .or_else(|| quoted_name(message, "unknown method "));
         let child = table.iter().find(|(k, v)| {
             named == Some(k.get_ref().as_ref())
                 || (variant.is_some() && v.get_ref().as_str() == variant)

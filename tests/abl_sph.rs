@@ -434,7 +434,7 @@ fn the_vortex_budget_balances_every_step() {
     let mut totals = [0usize; 6];
     for _ in 0..40 {
         let rec = p.step(None, None).expect("steps");
-        let t = rec.sph_turbulence.expect("the stage ran");
+        let t = common::turbulence(&p).last.expect("the stage ran");
         let after = count + t.seeded + t.born;
         let gone = t.split + t.merged + t.dissipated + t.removed;
         assert_eq!(after - gone, t.particles, "step {}: {t:?}", rec.step);

@@ -34,8 +34,9 @@
 use ndarray::{s, Array3, Zip};
 use rayon::prelude::*;
 
+use super::frames::Kind;
 use super::simulation::{Simulation, StepError};
-use super::stages::{Stage, StepRecord};
+use super::stages::{AddedColumns, Stage, StepRecord};
 use crate::grid::mac::cell_beside;
 use crate::grid::{GridSolver, Liquid, MacGrid};
 use crate::scene::Coupling;
@@ -120,10 +121,12 @@ impl Stage for SurfaceExchange {
         let liquid_cells = liquid.cells.iter().filter(|&&c| c).count();
         grid.set_liquid(liquid, rec.dt);
         let (drag, area) = exchange_drag(sph, grid, &field, c, rec.dt);
-        let e = rec.exchange.get_or_insert_with(Exchange::default);
-        e.drag = drag;
-        e.liquid_cells = liquid_cells;
-        e.area = area;
+        sim.exchange = Some(Exchange {
+            drag,
+            pressure: Vec3::zeros(),
+            liquid_cells,
+            area,
+        });
         Ok(())
     }
 
@@ -156,10 +159,37 @@ impl Stage for SurfacePressure {
             .map(|(cell, force)| (grid.mac.cell_center(cell), force * rec.dt))
             .collect();
         let (total, _) = give_to_particles(sph, &impulses);
-        rec.exchange.get_or_insert_with(Exchange::default).pressure = total;
+        let e = sim.exchange.get_or_insert_with(Exchange::default);
+        e.pressure = total;
+        let (drag, pressure) = (e.drag / rec.dt, e.pressure / rec.dt);
+        let mut row: Vec<Real> = drag.iter().chain(pressure.iter()).copied().collect();
+        row.extend([e.liquid_cells as Real, e.area]);
+        rec.added.push((Kind::Grid, row));
         Ok(())
     }
+
+    /// The exchange of both stages, as the forces the water felt.
+    fn added_columns(&self, _sim: &Simulation) -> Option<AddedColumns> {
+        Some(AddedColumns {
+            to: Kind::Grid,
+            names: COLUMNS.map(String::from).to_vec(),
+            note: "the air's drag and pressure force on the water, liquid cells, surface area",
+        })
+    }
 }
+
+/// The columns of the exchange in the grid's metrics: the forces on the water (the air's are
+/// opposite), N, the cells under the liquid and the area the drag acted on, m^2.
+const COLUMNS: [&str; 8] = [
+    "drag_force_x",
+    "drag_force_y",
+    "drag_force_z",
+    "pressure_force_x",
+    "pressure_force_y",
+    "pressure_force_z",
+    "liquid_cells",
+    "surface_area",
+];
 
 /// Adds each impulse (at a point, N s) to the particles near its point, shared by their kernel
 /// weights there; returns the impulse given and whether each was (one with no particle near

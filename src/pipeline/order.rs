@@ -1,7 +1,8 @@
 //! The order of a step's stages, one function per kind of scene. [`stages`] builds the stages
 //! a scene needs (each is `None` when nothing asks for it) and hands them to the ordering of
 //! its kind; a stage that is not built does not run, and `--plan` prints the list as ordered
-//! here. A new stage is its own file plus one line in the ordering functions that run it.
+//! here. A new stage is its own file plus one line in the ordering functions that run it; the
+//! metrics columns it adds reach its solver's metrics stage from here ([`Stage::adopt_columns`]).
 
 use super::coupling::{SurfaceExchange, SurfacePressure};
 use super::frames::Kind;
@@ -57,7 +58,12 @@ pub fn stages(
         (None, true, false) => (SceneKind::Sph, sph(set)),
         (None, false, _) => (SceneKind::Grid, grid(set)),
     };
-    Ok((kind, order.into_iter().flatten().collect()))
+    let mut stages: Vec<Box<dyn Stage>> = order.into_iter().flatten().collect();
+    let added: Vec<_> = stages.iter().filter_map(|s| s.added_columns(sim)).collect();
+    for stage in &mut stages {
+        stage.adopt_columns(&added);
+    }
+    Ok((kind, stages))
 }
 
 /// A grid scene: Figure 9's turbulence (lines 1–25), then the grid's own step (line 28).
@@ -174,6 +180,7 @@ impl StageSet {
                 gravity: Vec3::from(scene.gravity),
                 file: Kind::Particles.file("metrics.csv", both),
                 recorder: None,
+                added: Vec::new(),
             }) as Box<dyn Stage>
         });
         let grid_metrics: Built = has_grid.then(|| {
@@ -189,7 +196,7 @@ impl StageSet {
                 file: Kind::Grid.file("metrics.csv", both),
                 csv: None,
                 taylor_green,
-                coupled,
+                added: Vec::new(),
             }) as Box<dyn Stage>
         });
         Ok(Self {

@@ -1,5 +1,6 @@
 //! What a scene simulates: its solvers, stepped on one clock.
 
+use super::coupling::Exchange;
 use super::turbulence::Turbulence;
 use crate::grid::{GridError, GridSolver};
 use crate::io::IoError;
@@ -32,6 +33,8 @@ pub struct Simulation {
     /// The SPH fluid's vortex particles (its boundary-layer field rides on the particles),
     /// when an obstacle has a database; a coupled scene has both sets, each in its medium.
     pub sph_turbulence: Option<Turbulence>,
+    /// What the water received across its surface in the last step, in a coupled scene.
+    pub exchange: Option<Exchange>,
     pub(super) time: Real,
     pub(super) steps: u64,
 }
@@ -44,6 +47,7 @@ impl Simulation {
             grid,
             grid_turbulence: None,
             sph_turbulence: None,
+            exchange: None,
             time: 0.0,
             steps: 0,
         }

@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
+use super::frames::Kind;
 use super::simulation::{Simulation, StepError};
-use super::turbulence::TurbulenceStats;
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
@@ -13,19 +13,45 @@ use crate::sph::StepStats;
 use crate::{Real, Vec3};
 
 /// What the stages of one step share: the clock and what the solvers reported.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct StepRecord {
     /// The step's index and start time.
     pub step: u64,
     pub time: Real,
     /// The step size every solver advances by.
     pub dt: Real,
+    /// What the SPH solver's step did.
     pub sph: Option<StepStats>,
+    /// What the grid solver's step did.
     pub grid: Option<GridStepStats>,
-    pub grid_turbulence: Option<TurbulenceStats>,
-    pub sph_turbulence: Option<TurbulenceStats>,
-    /// What the water received across its surface, in a coupled scene.
-    pub exchange: Option<super::coupling::Exchange>,
+    /// The values the stages added to a solver's metrics this step, in stage order, one entry
+    /// per stage that has [`Stage::added_columns`].
+    pub added: Vec<(Kind, Vec<Real>)>,
+}
+
+impl StepRecord {
+    /// The values added to the metrics of `kind`'s solver, in stage order.
+    fn added_to(&self, kind: Kind) -> impl Iterator<Item = Real> + '_ {
+        self.added
+            .iter()
+            .filter(move |(k, _)| *k == kind)
+            .flat_map(|(_, values)| values.iter().copied())
+    }
+}
+
+/// Columns a stage adds to a solver's `metrics.csv`, after the solver's own.
+#[derive(Debug, Clone)]
+pub struct AddedColumns {
+    /// Whose `metrics.csv`.
+    pub to: Kind,
+    pub names: Vec<String>,
+    /// What they are, for the plan.
+    pub note: &'static str,
+}
+
+/// The notes of the columns added to `kind`'s metrics, each after "; ".
+fn notes(added: &[AddedColumns]) -> String {
+    added.iter().map(|a| format!("; {}", a.note)).collect()
 }
 
 /// One stage of a step. Stages are `Send`, so a run can step on another thread than the one
@@ -49,6 +75,16 @@ pub trait Stage: Send {
     fn ran<'a>(&self, _sim: &'a Simulation) -> &'a [&'static str] {
         &[]
     }
+
+    /// The metrics columns it adds to a solver's `metrics.csv`; its `run` then pushes their
+    /// values to [`StepRecord::added`] every step.
+    fn added_columns(&self, _sim: &Simulation) -> Option<AddedColumns> {
+        None
+    }
+
+    /// Told, once the stages are ordered, the columns they add (the metrics stages write
+    /// those of their solver).
+    fn adopt_columns(&mut self, _added: &[AddedColumns]) {}
 
     /// The CSV series it writes (metrics, probes) once opened, whose last row is the last
     /// step's.
@@ -211,6 +247,8 @@ pub struct SphMetrics {
     pub gravity: Vec3,
     pub file: String,
     pub recorder: Option<(MetricsRecorder, StateMetrics)>,
+    /// The other stages' columns of the fluid's metrics.
+    pub added: Vec<AddedColumns>,
 }
 
 impl Stage for SphMetrics {
@@ -218,26 +256,29 @@ impl Stage for SphMetrics {
         "metrics"
     }
 
-    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         let names: Vec<_> = self.metrics.iter().map(|m| m.column()).collect();
         (
             format!(
                 "{}: {} (state at the start of each step){}",
                 self.file,
                 names.join(", "),
-                sim.sph_turbulence
-                    .as_ref()
-                    .map_or(String::new(), |t| format!("; {}", t.describe_columns()))
+                notes(&self.added)
             ),
             Vec::new(),
         )
     }
 
+    fn adopt_columns(&mut self, added: &[AddedColumns]) {
+        self.added = added
+            .iter()
+            .filter(|a| a.to == Kind::Particles)
+            .cloned()
+            .collect();
+    }
+
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
-        let extra = sim
-            .sph_turbulence
-            .as_ref()
-            .map_or(Vec::new(), |t| t.columns());
+        let extra: Vec<String> = self.added.iter().flat_map(|a| a.names.clone()).collect();
         let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics, &extra)?;
         let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
         let state = recorder.measure(sph, &self.gravity);
@@ -249,10 +290,7 @@ impl Stage for SphMetrics {
         let (Some((recorder, state)), Some(stats)) = (self.recorder.as_mut(), rec.sph) else {
             return Ok(());
         };
-        let extra = match (&sim.sph_turbulence, rec.sph_turbulence) {
-            (Some(_), Some(t)) => t.row(),
-            _ => Vec::new(),
-        };
+        let extra: Vec<Real> = rec.added_to(Kind::Particles).collect();
         recorder.write(rec.step, rec.time, state, &stats, &extra)?;
         *state = recorder.measure(sim.sph(), &self.gravity);
         Ok(())
@@ -283,29 +321,16 @@ const GRID_METRICS: [&str; 10] = [
     "step_seconds",
 ];
 
-/// The grid row of each step: what the step did and the kinetic energy it ended with, what
-/// the turbulence stage did when the scene has one, and for a Taylor–Green scene the error of
-/// the energy decay.
+/// The grid row of each step: what the step did and the kinetic energy it ended with, the
+/// columns other stages add (the turbulence's, the coupling's), and for a Taylor–Green scene
+/// the error of the energy decay.
 pub struct GridMetrics {
     pub file: String,
     pub csv: Option<CsvSeries>,
     pub taylor_green: Option<TaylorGreenDecay>,
-    /// A coupled scene's: the forces the water felt across its surface.
-    pub coupled: bool,
+    /// The other stages' columns of the grid's metrics.
+    pub added: Vec<AddedColumns>,
 }
-
-/// Columns of a coupled scene's grid metrics: the forces on the water (the air's are opposite),
-/// N, the cells under the liquid and the area the drag acted on, m^2.
-const COUPLING_METRICS: [&str; 8] = [
-    "drag_force_x",
-    "drag_force_y",
-    "drag_force_z",
-    "pressure_force_x",
-    "pressure_force_y",
-    "pressure_force_z",
-    "liquid_cells",
-    "surface_area",
-];
 
 /// The Taylor–Green vortex's energy decays as E(t) = E(0) exp(-4 nu t); the column
 /// `taylor_green_error` is |ln(E / E(t))| after each step, with E(0) the grid's own energy of
@@ -320,39 +345,35 @@ impl Stage for GridMetrics {
         "metrics"
     }
 
-    fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+    fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         (
             format!(
                 "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
-                 change rate, stage times{}{}{}",
+                 change rate, stage times{}{}",
                 self.file,
-                sim.grid_turbulence
-                    .as_ref()
-                    .map_or(String::new(), |t| format!("; {}", t.describe_columns())),
+                notes(&self.added),
                 if self.taylor_green.is_some() {
                     "; Taylor-Green energy decay error |ln(E / E(0) exp(-4 nu t))|"
                 } else {
                     ""
                 },
-                if self.coupled {
-                    "; the air's drag and pressure force on the water, liquid cells, surface area"
-                } else {
-                    ""
-                }
             ),
             Vec::new(),
         )
     }
 
+    fn adopt_columns(&mut self, added: &[AddedColumns]) {
+        self.added = added
+            .iter()
+            .filter(|a| a.to == Kind::Grid)
+            .cloned()
+            .collect();
+    }
+
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
         columns.extend(GRID_METRICS.map(String::from));
-        if let Some(t) = &sim.grid_turbulence {
-            columns.extend(t.columns());
-        }
-        if self.coupled {
-            columns.extend(COUPLING_METRICS.map(String::from));
-        }
+        columns.extend(self.added.iter().flat_map(|a| a.names.clone()));
         if let (Some(tg), Some(grid)) = (self.taylor_green.as_mut(), sim.grid.as_ref()) {
             tg.initial_energy = grid.kinetic_energy();
             columns.push("taylor_green_error".into());
@@ -381,15 +402,7 @@ impl Stage for GridMetrics {
             s.project_seconds,
             s.total_seconds,
         ];
-        if let (Some(_), Some(t)) = (&sim.grid_turbulence, rec.grid_turbulence) {
-            row.extend(t.row());
-        }
-        if self.coupled {
-            let e = rec.exchange.unwrap_or_default();
-            let (drag, pressure) = (e.drag / rec.dt, e.pressure / rec.dt);
-            row.extend(drag.iter().chain(pressure.iter()));
-            row.extend([e.liquid_cells as Real, e.area]);
-        }
+        row.extend(rec.added_to(Kind::Grid));
         if let Some(tg) = &self.taylor_green {
             let exact = tg.initial_energy * (-4.0 * tg.nu * sim.grid().time()).exp();
             row.push((energy / exact).ln().abs());

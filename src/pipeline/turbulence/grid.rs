@@ -23,8 +23,9 @@ use crate::abl::{AblSettings, Seeding};
 use crate::grid::advect::{advect_band_into, Band};
 use crate::grid::walls::{boundary_cells, mean_velocity, shell_cells, wall_distance};
 use crate::grid::{Advection, GridSolver};
+use crate::pipeline::frames::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
-use crate::pipeline::stages::{Stage, StepRecord};
+use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;
 use crate::vortex::{synthesize, synthesize_refined, VortexParticles};
 use crate::{Real, Vec3};
@@ -128,11 +129,10 @@ impl GridTurbulence {
         };
         let common = Common::build(settings, shapes, &grid.bodies, res)?;
         let moving = grid.bodies.iter().any(|b| b.is_moving());
-        sim.grid_turbulence = Some(Turbulence {
-            abl: Some(std::array::from_fn(|_| Array3::zeros(grid.mac.dims))),
-            vortices: VortexParticles::new(),
-            parts: &PARTS,
-        });
+        sim.grid_turbulence = Some(Turbulence::new(
+            Some(std::array::from_fn(|_| Array3::zeros(grid.mac.dims))),
+            &PARTS,
+        ));
         Ok(Self {
             cells: common.obstacles.iter().map(|_| Cells::default()).collect(),
             common,
@@ -324,11 +324,16 @@ impl Stage for GridTurbulence {
             .and(y)
             .and(z)
             .fold(0.0, |s, &a, &b, &c| s + (a * a + b * b + c * c).sqrt());
-        rec.grid_turbulence = Some(stats);
+        state.record(stats, Kind::Grid, rec);
         Ok(())
     }
 
     fn ran<'a>(&self, _sim: &'a Simulation) -> &'a [&'static str] {
         &PARTS
+    }
+
+    fn added_columns(&self, sim: &Simulation) -> Option<AddedColumns> {
+        let state = sim.grid_turbulence.as_ref()?;
+        Some(state.added_columns(Kind::Grid))
     }
 }

@@ -25,6 +25,8 @@ use ndarray::Array3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use super::frames::Kind;
+use super::stages::{AddedColumns, StepRecord};
 use super::RunError;
 use crate::abl::seeding::{Seed, SeedingParams};
 use crate::abl::{AblDatabase, AblSettings, Seeding, WallLayer};
@@ -50,6 +52,8 @@ pub struct Turbulence {
     pub vortices: VortexParticles,
     /// The stage's parts, in order (the `*_seconds` columns of the metrics).
     pub parts: &'static [&'static str; 5],
+    /// What the stage did in its last step.
+    pub last: Option<TurbulenceStats>,
 }
 
 /// What the turbulence stage did in one step: the particle budget balances,
@@ -91,26 +95,41 @@ const COLUMNS: [&str; 9] = [
 ];
 
 impl Turbulence {
-    /// The metrics columns of its stage.
-    pub fn columns(&self) -> Vec<String> {
-        let mut out: Vec<String> = COLUMNS.map(String::from).to_vec();
-        out.extend(
+    /// The state of a turbulence stage with these parts, before its first step.
+    fn new(abl: Option<[Array3<Real>; 3]>, parts: &'static [&'static str; 5]) -> Self {
+        Self {
+            abl,
+            vortices: VortexParticles::new(),
+            parts,
+            last: None,
+        }
+    }
+
+    /// The metrics columns its stage adds to the metrics of `to`'s solver.
+    fn added_columns(&self, to: Kind) -> AddedColumns {
+        let mut names: Vec<String> = COLUMNS.map(String::from).to_vec();
+        names.extend(
             self.parts
                 .map(|p| format!("{}_seconds", p.replace(' ', "_"))),
         );
-        out
+        AddedColumns {
+            to,
+            names,
+            note: "vortex particles and their budget (seeded, split, born, merged, dissipated, \
+                   removed), vortex energy, ABL magnitude sum, turbulence part times",
+        }
     }
 
-    /// The plan's note on the metrics columns it adds.
-    pub fn describe_columns(&self) -> &'static str {
-        "vortex particles and their budget (seeded, split, born, merged, dissipated, removed), \
-         vortex energy, ABL magnitude sum, turbulence part times"
+    /// Keeps what the stage did this step, and adds its values to the metrics of `to`.
+    fn record(&mut self, stats: TurbulenceStats, to: Kind, rec: &mut StepRecord) {
+        rec.added.push((to, stats.row()));
+        self.last = Some(stats);
     }
 }
 
 impl TurbulenceStats {
-    /// Its values in the order of [`Turbulence::columns`].
-    pub fn row(&self) -> Vec<Real> {
+    /// Its values in the order of the stage's columns.
+    fn row(&self) -> Vec<Real> {
         let mut row: Vec<Real> = [
             self.particles,
             self.seeded,

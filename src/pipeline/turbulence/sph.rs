@@ -33,8 +33,9 @@ use super::{
 use crate::abl::params::LAYER_SPACINGS;
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
+use crate::pipeline::frames::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
-use crate::pipeline::stages::{Stage, StepRecord};
+use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;
 use crate::spatial::PointHash;
 use crate::sph::walls::wall_distance;
@@ -80,11 +81,7 @@ impl SphTurbulence {
         };
         let common = Common::build(settings, shapes, &sph.bodies, res)?;
         let field = sph.fluid.carry(ABL_FIELD);
-        sim.sph_turbulence = Some(Turbulence {
-            abl: None,
-            vortices: VortexParticles::new(),
-            parts: &PARTS,
-        });
+        sim.sph_turbulence = Some(Turbulence::new(None, &PARTS));
         Ok(Self { common, field })
     }
 
@@ -298,11 +295,16 @@ impl Stage for SphTurbulence {
             .iter()
             .map(|w| w.norm())
             .sum();
-        rec.sph_turbulence = Some(stats);
+        state.record(stats, Kind::Particles, rec);
         Ok(())
     }
 
     fn ran<'a>(&self, _sim: &'a Simulation) -> &'a [&'static str] {
         &PARTS
+    }
+
+    fn added_columns(&self, sim: &Simulation) -> Option<AddedColumns> {
+        let state = sim.sph_turbulence.as_ref()?;
+        Some(state.added_columns(Kind::Particles))
     }
 }

@@ -11,6 +11,10 @@
 //! (semi-)definite 7-point operator, singular exactly on the components of the fine level that
 //! touch no Dirichlet cell.
 //!
+//! With weighted faces (cut cells), the Dirichlet terms the coarsening sums are weighted as the
+//! fine diagonal's are, and coarse unknowns whose faces are open less than [`WEAK`] of a full
+//! cell's are left out of the coarse level (see there).
+//!
 //! Smoothing is red-black Gauss–Seidel (colour classes from [`Layout::colour_groups`]), forward
 //! before the coarse correction and in reverse order after it, and the transfers are transposes
 //! of each other ([`super::transfer`]), so the V-cycle is a symmetric positive definite operator
@@ -19,6 +23,7 @@
 //! keeps f64 residuals, so the attainable accuracy is that of f64.
 
 use super::layout::Layout;
+use super::poisson::coordinates;
 use super::stencil::{
     for_each_slab, CoarseCoefficients, Coefficients, DirichletTable, FineCoefficients, FineStencil,
     Problem, Row, DIRICHLET, FLUID, PARALLEL_MIN_CELLS, SOLID,
@@ -34,6 +39,14 @@ const COARSE_SWEEPS: usize = 2;
 const COARSEST_SWEEPS: usize = 20;
 /// Coarsening stops once no axis is longer than this.
 const COARSEST_MAX_SIDE: usize = 4;
+/// With weighted faces, a coarse unknown whose diagonal is less than this share of a fully open
+/// cell's is made solid, its faces closed: the transfers are trilinear, so its restricted
+/// right-hand side gathers the residuals of well-coupled fine cells around it, which its tiny
+/// diagonal (the sum of sliver faces) turns into a huge value that the prolongation spreads
+/// back over them. As a solid cell it takes the mean of its neighbours instead, as the
+/// staircase's covered cells do. On the cut sphere at 128^3 this takes MGPCG from 8 iterations
+/// to the staircase's 6 (any share from 0.005 to 0.2 does; 1e-6 relative residual).
+const WEAK: f32 = 0.01;
 
 /// A slice that several threads write at provably disjoint places: during one Gauss–Seidel
 /// colour class every thread writes only cells of that class and reads only cells of other
@@ -199,6 +212,10 @@ trait LevelView: Sync {
     /// Dirichlet weight along `axis`, scale included.
     fn dirichlet(&self, axis: usize, idx: usize) -> f32;
     fn shift(&self, idx: usize) -> f32;
+    /// Weight of a fully open face along each axis, scale included.
+    fn unit(&self) -> [f32; 3];
+    /// Whether faces may weigh other than [`LevelView::unit`] (the fine problem has weights).
+    fn weighted(&self) -> bool;
 }
 
 struct FineView<'a> {
@@ -218,7 +235,14 @@ impl LevelView for FineView<'_> {
         self.stencil.upper_weight(axis, idx) * self.problem.scale as f32
     }
     fn dirichlet(&self, axis: usize, idx: usize) -> f32 {
-        f32::from(self.dirichlet.get(idx)[axis]) * self.problem.scale as f32
+        let count = self.dirichlet.get(idx)[axis];
+        let sum = if count == 0 || !self.weighted() {
+            f32::from(count)
+        } else {
+            self.problem
+                .weighted_dirichlet(axis, coordinates(&self.problem.layout, idx))
+        };
+        sum * self.problem.scale as f32
     }
     fn shift(&self, idx: usize) -> f32 {
         if self.problem.kinds[idx] == FLUID {
@@ -226,6 +250,12 @@ impl LevelView for FineView<'_> {
         } else {
             0.0
         }
+    }
+    fn unit(&self) -> [f32; 3] {
+        [self.problem.scale as f32; 3]
+    }
+    fn weighted(&self) -> bool {
+        self.problem.weights.is_some()
     }
 }
 
@@ -236,6 +266,8 @@ struct CoarseOperator {
     coef: CoarseCoefficients,
     dirichlet: [Vec<f32>; 3],
     shift: Vec<f32>,
+    unit: [f32; 3],
+    weighted: bool,
 }
 
 impl LevelView for CoarseOperator {
@@ -253,6 +285,12 @@ impl LevelView for CoarseOperator {
     }
     fn shift(&self, idx: usize) -> f32 {
         self.shift[idx]
+    }
+    fn unit(&self) -> [f32; 3] {
+        self.unit
+    }
+    fn weighted(&self) -> bool {
+        self.weighted
     }
 }
 
@@ -311,32 +349,22 @@ fn coarsen(fine: &impl LevelView) -> (CoarseOperator, [usize; 3]) {
         }
         out
     };
-    let cells: Vec<CoarseCell> = if cl.len() >= PARALLEL_MIN_CELLS {
+    let mut cells: Vec<CoarseCell> = if cl.len() >= PARALLEL_MIN_CELLS {
         (0..cl.len()).into_par_iter().map(cell).collect()
     } else {
         (0..cl.len()).map(cell).collect()
     };
-    let upper = [0, 1, 2].map(|a| cells.iter().map(|c| c.upper[a]).collect::<Vec<f32>>());
-    let mut diag = vec![0.0f32; cl.len()];
-    for i in 0..cl.n[0] {
-        for j in 0..cl.n[1] {
-            for k in 0..cl.n[2] {
-                let idx = cl.index(i, j, k);
-                let c = &cells[idx];
-                let mut d = c.shift + c.dirichlet.iter().sum::<f32>();
-                let coord = [i, j, k];
-                for a in 0..3 {
-                    d += c.upper[a];
-                    if let Some(s) = cl.step(a, coord[a], false) {
-                        let mut nb = coord;
-                        nb[a] = s;
-                        d += upper[a][cl.index(nb[0], nb[1], nb[2])];
-                    }
-                }
-                diag[idx] = d;
-            }
-        }
+    let fine_unit = fine.unit();
+    let unit: [f32; 3] = std::array::from_fn(|a| {
+        let area: usize = (0..3).filter(|&b| b != a).map(|b| factors[b]).product();
+        fine_unit[a] * area as f32 / factors[a] as f32
+    });
+    if fine.weighted() {
+        drop_weak(&cl, &mut cells, unit);
     }
+    let diag: Vec<f32> = (0..cl.len())
+        .map(|idx| diagonal(&cl, &cells, unit, idx).0)
+        .collect();
     let inv = diag
         .iter()
         .zip(&cells)
@@ -353,9 +381,66 @@ fn coarsen(fine: &impl LevelView) -> (CoarseOperator, [usize; 3]) {
         kinds: cells.iter().map(|c| c.kind).collect(),
         dirichlet: [0, 1, 2].map(|a| cells.iter().map(|c| c.dirichlet[a]).collect()),
         shift: cells.iter().map(|c| c.shift).collect(),
-        coef: CoarseCoefficients { upper, diag, inv },
+        unit,
+        weighted: fine.weighted(),
+        coef: CoarseCoefficients {
+            upper: [0, 1, 2].map(|a| cells.iter().map(|c| c.upper[a]).collect()),
+            diag,
+            inv,
+        },
     };
     (op, factors)
+}
+
+/// The diagonal of coarse cell `idx` (shift, Dirichlet terms and the weights of its faces) and
+/// the sum of its faces' weights were they fully open (`unit` per axis).
+fn diagonal(cl: &Layout, cells: &[CoarseCell], unit: [f32; 3], idx: usize) -> (f32, f32) {
+    let c = &cells[idx];
+    let coord = coordinates(cl, idx);
+    let mut d = c.shift + c.dirichlet.iter().sum::<f32>();
+    let mut full = 0.0;
+    for a in 0..3 {
+        d += c.upper[a];
+        if cl.step(a, coord[a], true).is_some() {
+            full += unit[a];
+        }
+        if let Some(s) = cl.step(a, coord[a], false) {
+            let mut nb = coord;
+            nb[a] = s;
+            d += cells[cl.index(nb[0], nb[1], nb[2])].upper[a];
+            full += unit[a];
+        }
+    }
+    (d, full)
+}
+
+/// Makes the [`WEAK`] coarse unknowns solid and closes their faces (the matrix stays symmetric;
+/// their neighbours' diagonals lose those faces' weights).
+fn drop_weak(cl: &Layout, cells: &mut [CoarseCell], unit: [f32; 3]) {
+    let weak: Vec<bool> = (0..cl.len())
+        .map(|idx| {
+            let (d, full) = diagonal(cl, cells, unit, idx);
+            cells[idx].kind == FLUID && d < WEAK * full
+        })
+        .collect();
+    for (idx, &w) in weak.iter().enumerate() {
+        if w {
+            cells[idx] = CoarseCell {
+                kind: SOLID,
+                ..Default::default()
+            };
+        }
+        let coord = coordinates(cl, idx);
+        for a in 0..3 {
+            if let Some(s) = cl.step(a, coord[a], true) {
+                let mut nb = coord;
+                nb[a] = s;
+                if weak[cl.index(nb[0], nb[1], nb[2])] {
+                    cells[idx].upper[a] = 0.0;
+                }
+            }
+        }
+    }
 }
 
 /// One level's buffers and its transfer to the next coarser level.

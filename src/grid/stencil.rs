@@ -77,6 +77,29 @@ impl Problem {
         d
     }
 
+    /// The Dirichlet terms along `axis` of unknown `c` with their faces' weights (the sides with
+    /// theirs), as its weighted diagonal counts them.
+    pub fn weighted_dirichlet(&self, axis: usize, c: [usize; 3]) -> f32 {
+        let l = &self.layout;
+        let idx = l.index(c[0], c[1], c[2]);
+        let mut sum = 0.0;
+        for (side, up) in [false, true].into_iter().enumerate() {
+            match l.step(axis, c[axis], up) {
+                Some(s) => {
+                    let mut nb = c;
+                    nb[axis] = s;
+                    let j = l.index(nb[0], nb[1], nb[2]);
+                    if self.kinds[j] == DIRICHLET {
+                        sum += self.weight(axis, if up { idx } else { j });
+                    }
+                }
+                None if !l.periodic[axis] => sum += f32::from(self.side_weight[axis][side]),
+                None => {}
+            }
+        }
+        sum
+    }
+
     /// Per-axis Dirichlet weights of every cell, computed once for the builders.
     pub fn dirichlet_table(&self) -> DirichletTable {
         let l = self.layout;

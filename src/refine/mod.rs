@@ -23,6 +23,7 @@ pub mod micropolar;
 pub mod packed;
 pub mod params;
 pub mod rankine;
+pub mod reference;
 pub mod vrsph;
 
 pub use crate::sph::hooks::StepContext;

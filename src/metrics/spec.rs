@@ -32,7 +32,7 @@ impl Axis {
 pub enum Probe {
     /// The fluid front: the largest coordinate along `axis` of any fluid particle, less `origin`.
     Front {
-        /// Names the probe's columns: A-Z, a-z, 0-9 and _, unique among the probes.
+        /// Names the probe's columns in `probes.csv` (a line probe's: its profile file).
         name: String,
         /// The axis the front advances along.
         axis: Axis,
@@ -43,7 +43,7 @@ pub enum Probe {
     /// Pressure and velocity at a point: kernel-interpolated (Shepard-normalised) on SPH,
     /// trilinear on the grid.
     Point {
-        /// Names the probe's columns (see `front`).
+        /// Names the probe's columns.
         name: String,
         /// Where it samples, m.
         position: [Real; 3],
@@ -51,7 +51,7 @@ pub enum Probe {
     /// Grid only: the velocity at `points` evenly spaced samples from `from` to `to`, written
     /// as `profile_NAME.csv` at the end of the run.
     Line {
-        /// Names the profile file (see `front`).
+        /// Names the profile file.
         name: String,
         /// First sample, m.
         from: [Real; 3],
@@ -64,7 +64,7 @@ pub enum Probe {
     /// Grid only: the force of the fluid on an obstacle (named by its `name`), pressure and
     /// viscous parts, N.
     Force {
-        /// Names the probe's columns (see `front`).
+        /// Names the probe's columns.
         name: String,
         /// The `name` of the obstacle whose force is measured.
         body: String,

@@ -275,6 +275,10 @@ impl Walker {
     /// A table tagged by its `type`: the tag's row, then each kind's keys, a key several kinds
     /// share once, its meaning saying which kinds take it (all of them: none said).
     fn tagged(&self, key: &str, variants: &[Value], tags: &[&str], out: &mut Vec<KeyRow>) {
+        let tag_key = format!("{key}.type");
+        let mut allowed: Vec<String> = tags.iter().map(|t| format!("\"{t}\"")).collect();
+        allowed = vec![allowed.join(" | ")];
+        allowed.extend(entry(&tag_key).and_then(|r| r.rule).map(str::to_owned));
         let described: Vec<String> = variants
             .iter()
             .zip(tags)
@@ -284,14 +288,10 @@ impl Walker {
             })
             .collect();
         out.push(KeyRow {
-            key: format!("{key}.type"),
+            key: tag_key.clone(),
             kind: "string".to_owned(),
             default: "required".to_owned(),
-            allowed: tags
-                .iter()
-                .map(|t| format!("\"{t}\""))
-                .collect::<Vec<_>>()
-                .join(" | "),
+            allowed: allowed.join("; "),
             meaning: "Which kind of table this is; it decides the other keys.".to_owned(),
             details: format!("{}.", described.join("; ")),
         });
@@ -299,7 +299,7 @@ impl Walker {
         for (variant, tag) in variants.iter().zip(tags) {
             let mut rows = Vec::new();
             self.properties(key, variant, &mut rows);
-            for row in rows.into_iter().filter(|r| r.key != format!("{key}.type")) {
+            for row in rows.into_iter().filter(|r| r.key != tag_key) {
                 match shared.iter_mut().find(|(r, _)| r.key == row.key) {
                     Some((_, kinds)) => kinds.push(tag),
                     None => shared.push((row, vec![tag])),
@@ -439,9 +439,27 @@ fn value(v: &Value, choices: &[(String, String)]) -> String {
     }
 }
 
-/// A doc comment on one line.
+/// A doc comment on one line, its rustdoc links (``[`Type`]``) plain code.
 fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
+    let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut out = String::with_capacity(text.len());
+    let mut rest = &text[..];
+    while let Some(start) = rest.find("[`") {
+        let link = rest[start + 1..]
+            .find("`]")
+            .map(|end| start + 1 + end + 2)
+            .filter(|&end| !rest[end..].starts_with('('));
+        let Some(end) = link else {
+            out.push_str(&rest[..start + 2]);
+            rest = &rest[start + 2..];
+            continue;
+        };
+        out.push_str(&rest[..start]);
+        out.push_str(&rest[start + 1..end - 1]);
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The first sentence of a doc comment, and the rest: a sentence ends at a full stop before a
@@ -483,5 +501,13 @@ mod tests {
         let (first, rest) = split_description("Wang et al. Sec. 5 says so, m. The rest.");
         assert_eq!(first, "Wang et al. Sec. 5 says so, m.");
         assert_eq!(rest, "The rest.");
+    }
+
+    #[test]
+    fn rustdoc_links_become_plain_code_and_web_links_stay() {
+        assert_eq!(
+            one_line("see [`Grid`] and\n [`a`](b), [x]"),
+            "see `Grid` and [`a`](b), [x]"
+        );
     }
 }

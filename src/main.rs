@@ -98,6 +98,12 @@ enum Command {
     Lookup(cli::abl::LookupArgs),
     /// Summarise an artificial-boundary-layer database.
     Info(cli::abl::InfoArgs),
+    /// Every scene key: its type, default, allowed range and meaning, from the code itself.
+    SceneKeys {
+        /// Print the book's page instead (docs/src/scene-reference.md).
+        #[arg(long)]
+        markdown: bool,
+    },
 }
 
 /// Runs the command; an error is printed as its chain of causes, never as a backtrace (an input
@@ -237,6 +243,17 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Slice(args) => cli::slice::run(&args)?,
         Command::Lookup(args) => cli::abl::lookup(&args)?,
         Command::Info(args) => cli::abl::info(&args)?,
+        Command::SceneKeys { markdown } => {
+            use eddy::scene::reference;
+            print!(
+                "{}",
+                if markdown {
+                    reference::markdown()
+                } else {
+                    reference::text()
+                }
+            );
+        }
     }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! The documentation holds together: the README stays short, every chapter of the book is in
 //! its summary and every summary entry exists, and every local link of the README, ARCHITECTURE.md
-//! and the book reaches a file.
+//! and the book reaches a file; the scene reference is what the code prints.
 
 use std::path::{Path, PathBuf};
 
@@ -89,4 +89,15 @@ fn every_local_link_reaches_a_file() {
             );
         }
     }
+}
+
+#[test]
+fn the_scene_reference_is_what_the_code_prints() {
+    let page = root().join("docs/src/scene-reference.md");
+    let committed = std::fs::read_to_string(&page).expect("docs/src/scene-reference.md");
+    assert!(
+        committed == eddy::scene::reference::markdown(),
+        "docs/src/scene-reference.md differs from what the code prints; regenerate it with \
+         `cargo run --release -- scene-keys --markdown > docs/src/scene-reference.md`"
+    );
 }

@@ -5,9 +5,10 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use eddy::pipeline::{Pipeline, Plan};
-use eddy::refine::registry::{self, check, Method, MethodParams, RangeError};
+use eddy::refine::registry::{self, Method, MethodParams, Range};
 use eddy::refine::{StepContext, StepHook};
 use eddy::{Real, Vec3};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Calls of the dummy's two hook points, over every test of this file.
@@ -15,17 +16,16 @@ static BEFORE: AtomicUsize = AtomicUsize::new(0);
 static AFTER: AtomicUsize = AtomicUsize::new(0);
 
 /// The dummy's keys: `speed`, added to every particle's x velocity each step.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct KickParams {
     speed: Real,
 }
 
-impl MethodParams for KickParams {
-    fn validate(&self) -> Result<(), RangeError> {
-        check("speed", self.speed, (0.0, true), (10.0, false))
-    }
+/// The dummy's one range.
+const RANGES: registry::Ranges = &[("speed", Range::open_closed(0.0, 10.0))];
 
+impl MethodParams for KickParams {
     fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
         Box::new(Kick(self.speed))
     }
@@ -57,7 +57,7 @@ impl StepHook for Kick {
 fn register_kick() {
     // Tests of one binary share the registry: the first registers, the others find it.
     if registry::find("kick").is_none() {
-        let _ = registry::register(Method::new::<KickParams>("kick", "a test's dummy"));
+        let _ = registry::register(Method::new::<KickParams>("kick", "a test's dummy", RANGES));
     }
 }
 
@@ -140,7 +140,8 @@ fn a_registered_method_s_keys_and_ranges_are_its_own() {
 fn a_taken_name_is_refused() {
     register_kick();
     for name in ["none", "vrsph", "kick"] {
-        let e = registry::register(Method::new::<KickParams>(name, "again")).expect_err("taken");
+        let e = registry::register(Method::new::<KickParams>(name, "again", RANGES))
+            .expect_err("taken");
         assert!(e.contains(name), "{e}");
     }
 }
@@ -170,4 +171,17 @@ fn every_method_file_is_in_the_table() {
         .collect();
     built_in.sort();
     assert_eq!(declared, built_in);
+}
+
+/// Ranges name numeric keys of their method: a range on a missing key is refused when the
+/// method registers, and every built-in method's ranges pass the same check.
+#[test]
+fn ranges_name_numeric_keys() {
+    const WRONG: registry::Ranges = &[("sped", Range::above(0.0))];
+    let e = registry::register(Method::new::<KickParams>("kick_typo", "a typo", WRONG))
+        .expect_err("no such key");
+    assert!(e.contains("`sped`"), "{e}");
+    for method in &registry::BUILT_IN {
+        method.verify().expect("built-in ranges name numeric keys");
+    }
 }

@@ -14,12 +14,13 @@
 
 use std::path::PathBuf;
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::Real;
 
 /// Where vortex particles are seeded.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Seeding {
     /// From the artificial boundary layer by Eq. 8 (Figure 9, lines 11–20).
@@ -31,12 +32,12 @@ pub enum Seeding {
 }
 
 /// The `[turbulence]` table.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TurbulenceParams {
     /// c_p of Eq. 8, 1/s: `p_T = 2 c_p dt (l_m |omega_ABL| / |U_0|)^2` is a probability per
     /// sample and step while `dt` carries seconds, so c_p carries 1/s (PAPER-NOTES.md). 0 seeds
-    /// nothing.
+    /// nothing; the paper uses about 1 to 4.
     #[serde(default = "d_c_p")]
     pub c_p: Real,
     /// |U_0| of Eq. 8, m/s. Default: the fastest inflow side's speed, else the fastest
@@ -49,7 +50,7 @@ pub struct TurbulenceParams {
     /// `gain omega_pre / thickness`, the thickness being one cell on a grid and
     /// [`LAYER_SPACINGS`] spacings on particles. So Eq. 8's `l_m |omega_ABL| / |U_0|` and the
     /// seeds' strengths are the same at any resolution: the paper's grid units, where a cell is
-    /// the unit of length.
+    /// the unit of length. Table 1 uses 0.4 to 6.2.
     #[serde(default = "d_one")]
     pub gain: Real,
     /// Largest radius `sqrt(6) sigma` of a seeded particle, in cells (section 4.3: 6).
@@ -60,7 +61,8 @@ pub struct TurbulenceParams {
     #[serde(default)]
     pub dissipation_radius: Option<Real>,
     /// Particles with a radius at most this (cells) are in the inertial subrange and split;
-    /// larger ones merge (section 4.2, energy transfer).
+    /// larger ones merge (section 4.2, energy transfer). In SPH scenes `r_max`,
+    /// `dissipation_radius` and this count particle spacings instead of cells.
     #[serde(default = "d_split")]
     pub split_radius: Real,
     /// Children per split, n (section 4.2: 2).
@@ -73,7 +75,9 @@ pub struct TurbulenceParams {
     #[serde(default)]
     pub seeding: Seeding,
     /// Synthesis lattice per grid cell per axis, 1 or 2 (Table 1, section 5.2: the kernels
-    /// are evaluated on a grid this much finer and averaged over each face). Grid scenes only.
+    /// are evaluated on a grid this much finer and averaged over each face). Grid scenes only;
+    /// in a scene with smoke, the smoke and temperature live on a grid twice as fine too
+    /// (section 5.2).
     #[serde(default = "d_upsample")]
     pub upsample: usize,
 }

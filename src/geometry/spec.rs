@@ -2,13 +2,14 @@
 //! (`[container]`, `[[obstacles]]`, smoke sources, the precomputation's obstacle). The scene
 //! re-exports them; [`super::RigidBody`] is built from a [`Body`].
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 use crate::Real;
 
 /// A rigid body: the container or an obstacle.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
     /// Name used in messages and outputs; defaults to the shape and index.
@@ -25,8 +26,8 @@ pub struct Body {
     /// Kinematic motion; static when left out.
     #[serde(default)]
     pub motion: Motion,
-    /// The artificial-boundary-layer database this obstacle sheds turbulence from (obstacles
-    /// of grid scenes only; the scene refuses it elsewhere).
+    /// The artificial-boundary-layer database this obstacle sheds turbulence from, in grid and
+    /// SPH scenes (obstacles only; the scene refuses it on the container).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub abl: Option<AblLink>,
     /// Kinematic viscosity of this body's wall against the SPH fluid (Liu et al. 2021 Eq. 4
@@ -39,28 +40,47 @@ pub struct Body {
 }
 
 /// An obstacle's link to its precomputed boundary layer (Pfaff et al. 2009, section 5.1).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AblLink {
-    /// The database `eddy-precompute` wrote for this obstacle, relative to the scene file.
+    /// The database `eddy-precompute` wrote for this obstacle, relative to the scene file. Its
+    /// geometry fingerprint must match the obstacle, scale included.
     pub database: PathBuf,
 }
 
 /// Shapes, after parry3d's conventions: cylinders and capsules lie along the local y axis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Shape {
     /// A box with the given half extents, m.
-    Box { half_extents: [Real; 3] },
+    Box {
+        /// Half the box's size along its local axes, m.
+        half_extents: [Real; 3],
+    },
     /// A sphere.
-    Sphere { radius: Real },
+    Sphere {
+        /// Radius, m.
+        radius: Real,
+    },
     /// A cylinder along local y.
-    Cylinder { radius: Real, half_height: Real },
+    Cylinder {
+        /// Radius, m.
+        radius: Real,
+        /// Half the length along local y, m.
+        half_height: Real,
+    },
     /// A capsule along local y (half_height is that of the cylindrical part).
-    Capsule { radius: Real, half_height: Real },
+    Capsule {
+        /// Radius, m.
+        radius: Real,
+        /// Half the length of the cylindrical part, m.
+        half_height: Real,
+    },
     /// A closed triangle mesh from an OBJ or STL file, relative to the scene file.
     Mesh {
+        /// The OBJ or STL file, relative to the scene file.
         path: PathBuf,
+        /// Factor on the mesh's coordinates.
         #[serde(default = "default_scale")]
         scale: Real,
     },
@@ -71,7 +91,7 @@ fn default_scale() -> Real {
 }
 
 /// Kinematic motion of a body: constant linear and angular velocity, or a keyframed path.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Motion {
     /// Linear velocity, m/s.
@@ -94,7 +114,7 @@ impl Motion {
 }
 
 /// A pose at a time.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Keyframe {
     /// Time, s.

@@ -11,6 +11,7 @@
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::{Real, Vec3};
@@ -26,7 +27,7 @@ fn default_modes() -> usize {
 }
 
 /// `[grid.inflow_turbulence]`: fluctuations added to every inflow side's normal velocity.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InflowTurbulence {
     /// Root-mean-square of the normal fluctuation, a fraction of the local inflow speed, in

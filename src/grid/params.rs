@@ -3,6 +3,7 @@
 //! here, and the scene builder (`src/scene/build.rs`) assembles a [`GridParams`] from a
 //! resolved scene.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::poisson::SolverSettings;
@@ -65,7 +66,7 @@ pub struct GridParams {
 }
 
 /// How the pressure and the viscosity see an obstacle's surface.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ObstacleSurface {
     /// Each cell is solid or fluid by its centre: the solvers see a staircase, first order.
@@ -80,7 +81,7 @@ pub enum ObstacleSurface {
 }
 
 /// Advection scheme of velocity and scalars.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Advection {
     /// Semi-Lagrangian, trilinear, second-order (midpoint) backtrace.
@@ -91,7 +92,7 @@ pub enum Advection {
 }
 
 /// Time discretisation of the implicit viscosity.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ViscosityScheme {
     /// First order, L-stable.
@@ -102,7 +103,7 @@ pub enum ViscosityScheme {
 }
 
 /// One side of the grid's domain.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum GridSide {
     /// A static no-slip wall.
@@ -123,7 +124,7 @@ pub enum GridSide {
 }
 
 /// The six sides of the grid's domain.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GridBoundary {
     #[serde(default)]
@@ -152,7 +153,7 @@ impl GridBoundary {
 }
 
 /// The shape of a [`InflowProfile`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ProfileShape {
     /// Plane Poiseuille flow between the two sides normal to `across`: `4 s (1 - s)`, s the
@@ -168,7 +169,7 @@ pub enum ProfileShape {
 }
 
 /// An inflow whose velocity is `velocity` times a shape over the side.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InflowProfile {
     /// Velocity where the shape is 1 (the centre of a parabola), m/s; normal to the side.
@@ -270,7 +271,7 @@ impl GridSide {
 }
 
 /// Smoke: passive density and temperature carried by the flow, lifted by buoyancy.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Smoke {
     /// Regions that set smoke density and temperature every step.
@@ -288,8 +289,9 @@ fn default_buoyancy() -> Real {
     1.0
 }
 
-/// A region that sets smoke every step.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A region that sets smoke every step. A still source that covers no cell centre emits
+/// nothing and is run with a warning naming it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SmokeSource {
     /// An analytic shape (no meshes), in the source's frame.

@@ -17,6 +17,7 @@ use std::fmt::Write as _;
 use std::io::Write;
 
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::zlib::zlib;
@@ -28,7 +29,7 @@ use crate::Real;
 const BLOCK: usize = 1 << 16;
 
 /// Floating-point precision of the arrays in VTK frames.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Precision {
     /// 4-byte floats: half the bytes, a relative rounding of 6e-8, plenty to look at.

@@ -1,12 +1,13 @@
 //! What a scene can ask the diagnostics for, as its `[[probes]]` and `output.metrics` write it:
 //! probes sampled every step into `probes.csv`, and the per-step metrics of `metrics.csv`.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::Real;
 
 /// A coordinate axis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Axis {
     X,
@@ -26,31 +27,48 @@ impl Axis {
 }
 
 /// A probe, sampled every step into `probes.csv`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Probe {
     /// The fluid front: the largest coordinate along `axis` of any fluid particle, less `origin`.
     Front {
+        /// Names the probe's columns in `probes.csv` (a line probe's: its profile file).
         name: String,
+        /// The axis the front advances along.
         axis: Axis,
+        /// Subtracted from the front's coordinate, m.
         #[serde(default)]
         origin: Real,
     },
     /// Pressure and velocity at a point: kernel-interpolated (Shepard-normalised) on SPH,
     /// trilinear on the grid.
-    Point { name: String, position: [Real; 3] },
+    Point {
+        /// Names the probe's columns.
+        name: String,
+        /// Where it samples, m.
+        position: [Real; 3],
+    },
     /// Grid only: the velocity at `points` evenly spaced samples from `from` to `to`, written
     /// as `profile_NAME.csv` at the end of the run.
     Line {
+        /// Names the profile file.
         name: String,
+        /// First sample, m.
         from: [Real; 3],
+        /// Last sample, m.
         to: [Real; 3],
+        /// Number of samples.
         #[serde(default = "default_line_points")]
         points: usize,
     },
     /// Grid only: the force of the fluid on an obstacle (named by its `name`), pressure and
     /// viscous parts, N.
-    Force { name: String, body: String },
+    Force {
+        /// Names the probe's columns.
+        name: String,
+        /// The `name` of the obstacle whose force is measured.
+        body: String,
+    },
 }
 
 fn default_line_points() -> usize {
@@ -70,7 +88,7 @@ impl Probe {
 }
 
 /// Per-step metrics a scene can ask for; each is a column of `metrics.csv`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Metric {
     KineticEnergy,

@@ -4,27 +4,30 @@
 //! and so strengthens them; it cannot create vortices, which is why the papers compare
 //! against it. Where eta vanishes there is no direction and no force.
 
-use super::registry::{check, Method, MethodParams, RangeError};
+use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `method = "confinement"`.
 pub const METHOD: Method = Method::new::<Params>(
     "confinement",
     "vorticity confinement in SPH form, a baseline of the refinement papers",
+    &[("epsilon", Range::at_least(0.0))],
 );
 
 /// The keys of `method = "confinement"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Confinement strength epsilon, m/s, >= 0.
+    /// Confinement strength epsilon, m/s.
     #[serde(default = "default_epsilon")]
     pub epsilon: Real,
-    /// Boundary samples take part in its operators (see `super::params`).
+    /// The wall samples take part in the method's difference operators. It models no-slip
+    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
 }
@@ -35,15 +38,6 @@ fn default_epsilon() -> Real {
 }
 
 impl MethodParams for Params {
-    fn validate(&self) -> Result<(), RangeError> {
-        check(
-            "epsilon",
-            self.epsilon,
-            (0.0, false),
-            (Real::INFINITY, true),
-        )
-    }
-
     fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
         Box::new(Confinement::new(self.epsilon, self.walls))
     }

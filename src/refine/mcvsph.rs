@@ -35,7 +35,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::registry::{check, Method, MethodParams, RangeError};
+use super::registry::{Method, MethodParams, Range};
 use super::{add_scaled, StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
@@ -43,6 +43,7 @@ use crate::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::biot_savart::{biot_savart, BiotSavartTree};
@@ -52,23 +53,29 @@ use super::biot_savart::{biot_savart, BiotSavartTree};
 pub const METHOD: Method = Method::new::<Params>(
     "mcvsph",
     "Monte Carlo vortical SPH (Ye et al., Algorithm 2)",
+    &[
+        ("sample_fraction", Range::open_closed(0.0, 1.0)),
+        ("volume_coefficient", Range::closed_open(0.0, 1.0)),
+        ("theta", Range::closed_open(0.0, 1.0)),
+    ],
 );
 
 /// The keys of `method = "mcvsph"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Fraction N / N_f of fluid particles paired with vortex particles, in (0, 1].
+    /// Fraction N / N_f of fluid particles paired with vortex particles.
     #[serde(default = "default_sample_fraction")]
     pub sample_fraction: Real,
-    /// Volume coefficient c of the vortex particles (Eq. 24), in [0, 1).
+    /// Volume coefficient c of the vortex particles (Ye et al. Eq. 24).
     #[serde(default = "default_volume_coefficient")]
     pub volume_coefficient: Real,
-    /// Opening parameter of the Biot–Savart treecode, in [0, 1): its error grows about as
-    /// theta^2 and its cost falls; 0 sums every pair directly.
+    /// Opening parameter of the Biot–Savart treecode: its error grows about as theta^2 and its
+    /// cost falls; 0 sums every pair directly.
     #[serde(default = "default_theta")]
     pub theta: Real,
-    /// Boundary samples take part in its operators (see `super::params`).
+    /// The wall samples take part in the method's difference operators. It models no-slip
+    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
 }
@@ -87,22 +94,6 @@ fn default_theta() -> Real {
 }
 
 impl MethodParams for Params {
-    fn validate(&self) -> Result<(), RangeError> {
-        check(
-            "sample_fraction",
-            self.sample_fraction,
-            (0.0, true),
-            (1.0, false),
-        )?;
-        check(
-            "volume_coefficient",
-            self.volume_coefficient,
-            (0.0, false),
-            (1.0, true),
-        )?;
-        check("theta", self.theta, (0.0, false), (1.0, true))
-    }
-
     fn build(&self, n: usize, seed: u64) -> Box<dyn StepHook> {
         Box::new(Mcvsph::new(
             n,

@@ -10,12 +10,13 @@
 //! micro-inertia cannot make the step unstable. Both curls are the shared difference curls
 //! (walls hold zero angular velocity). The rotational energy is sum_i m epsilon |omega_i|^2 / 2.
 
-use super::registry::{check, Method, MethodParams, RangeError};
+use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::WallField;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Micropolar model state.
@@ -23,19 +24,24 @@ use serde::{Deserialize, Serialize};
 pub const METHOD: Method = Method::new::<Params>(
     "micropolar",
     "micropolar SPH (Bender et al. 2019), a baseline of the refinement papers",
+    &[
+        ("nu_t", Range::closed(0.0, 1.0)),
+        ("micro_inertia", Range::above(0.0)),
+    ],
 );
 
 /// The keys of `method = "micropolar"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Transfer coefficient nu_t, m^2/s, in [0, 1].
+    /// Transfer coefficient nu_t, m^2/s.
     #[serde(default = "default_nu_t")]
     pub nu_t: Real,
-    /// Micro-inertia per unit mass epsilon, m^2, > 0.
+    /// Micro-inertia per unit mass epsilon, m^2.
     #[serde(default = "default_micro_inertia")]
     pub micro_inertia: Real,
-    /// Boundary samples take part in its operators (see `super::params`).
+    /// The wall samples take part in the method's difference operators. It models no-slip
+    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
 }
@@ -51,16 +57,6 @@ fn default_micro_inertia() -> Real {
 }
 
 impl MethodParams for Params {
-    fn validate(&self) -> Result<(), RangeError> {
-        check("nu_t", self.nu_t, (0.0, false), (1.0, false))?;
-        check(
-            "micro_inertia",
-            self.micro_inertia,
-            (0.0, true),
-            (Real::INFINITY, true),
-        )
-    }
-
     fn build(&self, n: usize, _seed: u64) -> Box<dyn StepHook> {
         Box::new(Micropolar::new(
             n,

@@ -25,7 +25,7 @@ use std::fmt;
 use serde::de::{Error as _, Unexpected};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::registry::{self, Method, Stored};
+use super::registry::{self, Method, Range, Stored};
 use super::StepHook;
 use crate::Real;
 
@@ -69,21 +69,52 @@ impl Refinement {
         self.0.is_none()
     }
 
-    /// Checks every parameter against its allowed range; errors name the key.
+    /// Checks every numeric parameter against its method's range; errors name the key.
     pub fn validate(&self) -> Result<(), InvalidParam> {
         let Some(chosen) = &self.0 else {
             return Ok(());
         };
-        chosen.params.validate().map_err(|e| InvalidParam {
-            key: format!("refinement.{}", e.key),
-            value: e.value,
-            allowed: format!("{} for method \"{}\"", e.allowed, chosen.method.name),
-        })
+        let params = &*chosen.params as &dyn erased_serde::Serialize;
+        let keys = toml::Table::try_from(params).unwrap_or_default();
+        for (key, range) in chosen.method.ranges {
+            let value = keys
+                .get(*key)
+                .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as Real)));
+            // Built-in methods are verified by a test, registered ones when registered.
+            let value = value.unwrap_or_else(|| {
+                panic!(
+                    "method \"{}\": its range names `{key}`, not a number of its keys",
+                    chosen.method.name
+                )
+            });
+            if !range.contains(value) {
+                return Err(InvalidParam {
+                    key: format!("refinement.{key}"),
+                    value,
+                    allowed: format!(
+                        "a finite number {} for method \"{}\"",
+                        in_words(range),
+                        chosen.method.name
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The step hook for `n` fluid particles; None for none.
     pub fn build(&self, n: usize, seed: u64) -> Option<Box<dyn StepHook>> {
         self.0.as_ref().map(|c| c.params.build(n, seed))
+    }
+}
+
+/// "in [0, 1]", "> 0": as the allowed range reads after "a finite number".
+fn in_words(range: &Range) -> String {
+    let text = range.describe();
+    if text.starts_with(['>', '<']) {
+        text
+    } else {
+        format!("in {text}")
     }
 }
 

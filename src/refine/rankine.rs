@@ -32,28 +32,31 @@
 
 use super::lanes::{CrossSum, F4};
 use super::packed::{Field, Packed, Quantity};
-use super::registry::{check, Method, MethodParams, RangeError};
+use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `method = "rankine"`.
 pub const METHOD: Method = Method::new::<Params>(
     "rankine",
     "Rankine vortex refinement (Wang et al. 2020, Algorithm 1)",
+    &[("beta", Range::closed(0.0, 1.0))],
 );
 
 /// The keys of `method = "rankine"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Core-radius factor beta in [0, 1]: r_c = beta sqrt(4 alpha_Oseen nu dt) (Eq. 11).
+    /// Core-radius factor beta: r_c = beta sqrt(4 alpha_Oseen nu dt) (Wang et al. 2020 Eq. 11).
     #[serde(default = "one")]
     pub beta: Real,
-    /// Boundary samples take part in its operators (see `super::params`).
+    /// The wall samples take part in the method's difference operators. It models no-slip
+    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
 }
@@ -63,10 +66,6 @@ fn one() -> Real {
 }
 
 impl MethodParams for Params {
-    fn validate(&self) -> Result<(), RangeError> {
-        check("beta", self.beta, (0.0, false), (1.0, false))
-    }
-
     fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
         Box::new(Rankine::new(self.beta, self.walls))
     }

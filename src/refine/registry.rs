@@ -1,16 +1,18 @@
-//! The refinement methods: one table that the scene loader, the validation, the plan, the bench
-//! and the help all read, and [`register`] to add a method at run time (a research method kept
+//! The refinement methods: one table that the scene loader, the validation, the plan, the bench,
+//! the help and the scene reference all read, and [`register`] to add a method at run time (a research method kept
 //! outside eddy, or a test's dummy) without touching any of them.
 //!
 //! A method is its parameter struct, in its own file: the keys of `[refinement]` besides
-//! `method`, as serde reads them (`deny_unknown_fields`, the papers' defaults), implementing
-//! [`MethodParams`] (its ranges and the step hook it builds), plus one line in [`BUILT_IN`].
+//! `method`, as serde reads them (`deny_unknown_fields`, the papers' defaults, doc comments
+//! that the scene reference prints), implementing [`MethodParams`] (the step hook it builds),
+//! with the ranges of its numeric keys, plus one line in [`BUILT_IN`].
 //! The hook says itself what it does in the plan ([`StepHook::describe`]).
 
 use std::any::Any;
 use std::fmt;
 use std::sync::RwLock;
 
+use schemars::JsonSchema;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -19,50 +21,84 @@ use crate::Real;
 
 /// A method's parameters once read from the scene.
 pub trait MethodParams: fmt::Debug + Send + Sync + 'static {
-    /// Checks every parameter against its allowed range (see [`check`]).
-    fn validate(&self) -> Result<(), RangeError>;
-
     /// The step hook for `n` fluid particles; `seed` is the scene's.
     fn build(&self, n: usize, seed: u64) -> Box<dyn StepHook>;
 }
 
-/// A parameter outside its range: its key within `[refinement]`, its value and what is allowed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RangeError {
-    pub key: &'static str,
-    pub value: Real,
-    pub allowed: String,
+/// The interval a numeric parameter must lie in (finite, and open or closed at each end; an
+/// infinite `hi` for no upper bound).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    lo: Real,
+    lo_open: bool,
+    hi: Real,
+    hi_open: bool,
 }
 
-/// Checks that `value` is finite and inside the interval from `lo` to `hi` (open at an end
-/// where `lo_open` or `hi_open`; `hi` infinite for no upper bound).
-pub fn check(
-    key: &'static str,
-    value: Real,
-    (lo, lo_open): (Real, bool),
-    (hi, hi_open): (Real, bool),
-) -> Result<(), RangeError> {
-    let inside = value.is_finite()
-        && (if lo_open { value > lo } else { value >= lo })
-        && (if hi_open { value < hi } else { value <= hi });
-    if inside {
-        return Ok(());
+impl Range {
+    /// [lo, hi].
+    pub const fn closed(lo: Real, hi: Real) -> Self {
+        Self::new(lo, false, hi, false)
     }
-    let allowed = if hi.is_infinite() {
-        format!("a finite number {} {lo}", if lo_open { ">" } else { ">=" })
-    } else {
-        format!(
-            "a finite number in {}{lo}, {hi}{}",
-            if lo_open { '(' } else { '[' },
-            if hi_open { ')' } else { ']' }
-        )
-    };
-    Err(RangeError {
-        key,
-        value,
-        allowed,
-    })
+    /// (lo, hi].
+    pub const fn open_closed(lo: Real, hi: Real) -> Self {
+        Self::new(lo, true, hi, false)
+    }
+    /// [lo, hi).
+    pub const fn closed_open(lo: Real, hi: Real) -> Self {
+        Self::new(lo, false, hi, true)
+    }
+    /// >= lo.
+    pub const fn at_least(lo: Real) -> Self {
+        Self::new(lo, false, Real::INFINITY, true)
+    }
+    /// > lo.
+    pub const fn above(lo: Real) -> Self {
+        Self::new(lo, true, Real::INFINITY, true)
+    }
+
+    const fn new(lo: Real, lo_open: bool, hi: Real, hi_open: bool) -> Self {
+        Self {
+            lo,
+            lo_open,
+            hi,
+            hi_open,
+        }
+    }
+
+    /// Whether `value` is finite and inside.
+    pub fn contains(&self, value: Real) -> bool {
+        value.is_finite()
+            && (if self.lo_open {
+                value > self.lo
+            } else {
+                value >= self.lo
+            })
+            && (if self.hi_open {
+                value < self.hi
+            } else {
+                value <= self.hi
+            })
+    }
+
+    /// `[0, 1]`, `(0, 1]`, `> 0`, `>= 0`.
+    pub fn describe(&self) -> String {
+        if self.hi.is_infinite() {
+            format!("{} {}", if self.lo_open { ">" } else { ">=" }, self.lo)
+        } else {
+            format!(
+                "{}{}, {}{}",
+                if self.lo_open { '(' } else { '[' },
+                self.lo,
+                self.hi,
+                if self.hi_open { ')' } else { ']' }
+            )
+        }
+    }
 }
+
+/// Each numeric key of a method and its range, in the order the validation checks them.
+pub type Ranges = &'static [(&'static str, Range)];
 
 /// One refinement method: the name scene files give it, one line of what it is, and how its
 /// keys are read.
@@ -71,20 +107,51 @@ pub struct Method {
     pub name: &'static str,
     /// What it is, with its paper, for help texts.
     pub summary: &'static str,
+    /// The allowed range of each numeric key: the validation checks them, the scene reference
+    /// (`eddy scene-keys`) prints them.
+    pub ranges: Ranges,
     parse: fn(toml::Table) -> Result<Box<dyn Stored>, toml::de::Error>,
+    schema: fn() -> schemars::Schema,
 }
 
 impl Method {
-    /// The method `name` whose keys are the fields of `P`.
-    pub const fn new<P>(name: &'static str, summary: &'static str) -> Self
+    /// The method `name` whose keys are the fields of `P`, its numeric ones in `ranges`.
+    pub const fn new<P>(name: &'static str, summary: &'static str, ranges: Ranges) -> Self
     where
-        P: MethodParams + Serialize + DeserializeOwned + Clone + PartialEq,
+        P: MethodParams + Serialize + DeserializeOwned + Clone + PartialEq + JsonSchema,
     {
         Self {
             name,
             summary,
+            ranges,
             parse: parse_as::<P>,
+            schema: schema_of::<P>,
         }
+    }
+
+    /// The JSON schema of its keys (types, defaults, doc comments), for the scene reference.
+    pub fn schema(&self) -> schemars::Schema {
+        (self.schema)()
+    }
+
+    /// Checks that each key of its ranges is a number among its keys, so that the validation
+    /// finds every value it checks.
+    pub fn verify(&self) -> Result<(), String> {
+        let schema = self.schema();
+        for (key, _) in self.ranges {
+            let kind = schema
+                .as_value()
+                .pointer(&format!("/properties/{key}/type"))
+                .and_then(|t| t.as_str());
+            if !matches!(kind, Some("number" | "integer")) {
+                return Err(format!(
+                    "refinement method \"{}\": its range names `{key}`, which is not one of \
+                     its numeric keys",
+                    self.name
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Reads the method's keys (all of `[refinement]` but `method`).
@@ -100,6 +167,10 @@ where
     Ok(Box::new(toml::Value::Table(keys).try_into::<P>()?))
 }
 
+fn schema_of<P: JsonSchema>() -> schemars::Schema {
+    schemars::schema_for!(P)
+}
+
 /// The methods eddy ships, in the order help texts list them.
 pub static BUILT_IN: [Method; 5] = [
     rankine::METHOD,
@@ -113,7 +184,7 @@ pub static BUILT_IN: [Method; 5] = [
 static REGISTERED: RwLock<Vec<&'static Method>> = RwLock::new(Vec::new());
 
 /// Adds a method for the rest of the process: scenes may name it from then on. A name that
-/// is taken (or `none`) is refused.
+/// is taken (or `none`), or ranges that name no numeric key ([`Method::verify`]), are refused.
 pub fn register(method: Method) -> Result<(), String> {
     let mut registered = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
     let taken = method.name == "none"
@@ -125,6 +196,7 @@ pub fn register(method: Method) -> Result<(), String> {
             method.name
         ));
     }
+    method.verify()?;
     registered.push(Box::leak(Box::new(method)));
     Ok(())
 }

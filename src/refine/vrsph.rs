@@ -37,11 +37,12 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::registry::{check, Method, MethodParams, RangeError};
+use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
 use crate::{Real, Vec3};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -50,16 +51,18 @@ use std::f64::consts::PI;
 pub const METHOD: Method = Method::new::<Params>(
     "vrsph",
     "vorticity refinement through a stream function (Liu et al. 2021, Algorithm 2)",
+    &[("alpha", Range::closed(0.0, 2.0))],
 );
 
 /// The keys of `method = "vrsph"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Gain alpha of the velocity refinement (Eq. 17), in [0, 2]; 1 is the ideal refinement.
+    /// Gain alpha of the velocity refinement (Liu et al. 2021 Eq. 17); 1 is the ideal refinement.
     #[serde(default = "one")]
     pub alpha: Real,
-    /// Boundary samples take part in its operators (see `super::params`).
+    /// The wall samples take part in the method's difference operators. It models no-slip
+    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
 }
@@ -69,10 +72,6 @@ fn one() -> Real {
 }
 
 impl MethodParams for Params {
-    fn validate(&self) -> Result<(), RangeError> {
-        check("alpha", self.alpha, (0.0, false), (2.0, false))
-    }
-
     fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
         Box::new(Vrsph::new(self.alpha, self.walls))
     }

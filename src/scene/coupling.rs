@@ -1,14 +1,15 @@
 //! `[coupling]`: the exchange across the water surface of a scene with both a `[grid]` (the
 //! air) and a `[fluid]` (the water), and its checks.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::validate::{Checker, Interval};
+use super::validate::Checker;
 use super::{Scene, SceneError};
 use crate::Real;
 
 /// The coupling's parameters; the defaults are air over water.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Coupling {
     /// Drag coefficient C_d of the surface stress tau = rho_air C_d |u_air - u_water|
@@ -65,21 +66,9 @@ impl Scene {
                 format!("a scene with both [grid] (the air) and [fluid] (the water); this one has no {missing}"),
             ));
         };
-        c.num(
-            "coupling.drag_coefficient",
-            coupling.drag_coefficient,
-            Interval::closed(0.0, 0.1),
-        )?;
-        c.num(
-            "coupling.air_density",
-            coupling.air_density,
-            Interval::open_closed(0.0, 100.0),
-        )?;
-        c.num(
-            "coupling.occupancy_threshold",
-            coupling.occupancy_threshold,
-            Interval::open(0.0, 1.0),
-        )?;
+        c.ranged("coupling.drag_coefficient", coupling.drag_coefficient)?;
+        c.ranged("coupling.air_density", coupling.air_density)?;
+        c.ranged("coupling.occupancy_threshold", coupling.occupancy_threshold)?;
         if grid.density != super::grid::default_grid_density()
             && grid.density != coupling.air_density
         {

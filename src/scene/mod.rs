@@ -8,6 +8,8 @@ pub mod grid;
 pub mod load;
 mod open;
 pub mod overrides;
+pub mod ranges;
+pub mod reference;
 pub mod schema;
 pub mod turbulence;
 pub mod validate;

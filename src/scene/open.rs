@@ -15,7 +15,7 @@ impl Fluid {
             let side = inflow.side;
             for (k, axis) in side.tangents().into_iter().enumerate() {
                 let (lo, hi) = (domain.min[axis], domain.max[axis]);
-                let range = || Interval::closed(lo, hi).note("the domain's extent along the side");
+                let range = || Interval::closed(lo, hi).noted("the domain's extent along the side");
                 c.num(&format!("{key}.min[{k}]"), inflow.min[k], range())?;
                 c.num(&format!("{key}.max[{k}]"), inflow.max[k], range())?;
                 if inflow.max[k] - inflow.min[k] < self.spacing {

@@ -4,6 +4,7 @@
 //! setting. Defaults are the values a user gets when a key is left out; they are documented on
 //! each field and in the book's "Scene files" chapter (docs/src/scene-files.md).
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -15,7 +16,7 @@ use crate::stepping::StepLimits;
 use crate::Real;
 
 /// A whole scene: what is simulated, how, and what is written.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Name of the scene; the default output folder is `out/<name>`.
@@ -35,10 +36,13 @@ pub struct Scene {
     /// The SPH fluid, if the scene has one.
     #[serde(default)]
     pub fluid: Option<Fluid>,
-    /// The MAC-grid fluid, if the scene has one.
+    /// The MAC-grid fluid, if the scene has one; its viscosity is `viscosity.kinematic`.
     #[serde(default)]
     pub grid: Option<super::grid::Grid>,
-    /// The container the fluid sits in (its surface is sampled with boundary particles).
+    /// The container the fluid sits in (its surface is sampled with boundary particles). In a
+    /// scene with a `[fluid]` it is the water's tank: a grid in the same scene sees its outside
+    /// as solid and its inside open, so a container as large as the domain leaves the whole
+    /// grid to the air.
     #[serde(default)]
     pub container: Option<Body>,
     /// Obstacles in the flow, static or kinematically moving.
@@ -58,8 +62,10 @@ pub struct Scene {
     /// fluid (the water); without it the two only share the clock.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coupling: Option<super::Coupling>,
-    /// The SPH turbulence refinement (`none` when left out).
+    /// The SPH turbulence refinement (`none` when left out). Its keys are each method's own
+    /// (`crate::refine::registry`), so the scene reference reads them from the registry.
     #[serde(default)]
+    #[schemars(skip)]
     pub refinement: crate::refine::Refinement,
     /// Probes, each written as columns of `probes.csv`.
     #[serde(default)]
@@ -74,7 +80,7 @@ fn default_gravity() -> [Real; 3] {
 }
 
 /// An axis-aligned box given by its corners.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Domain {
     /// Lower corner, m.
@@ -84,14 +90,15 @@ pub struct Domain {
 }
 
 /// Time stepping: how long, and how the step size is chosen.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TimeStepping {
     /// Simulated end time, s. At least one of `end` and `steps` is given; with both the run
     /// ends at whichever comes first.
     #[serde(default)]
     pub end: Option<Real>,
-    /// Number of steps (see `end`).
+    /// Number of steps (see `end`). `eddy run --until` and `--steps` are recorded in `end` and
+    /// `steps` of the run's resolved `scene.toml`.
     #[serde(default)]
     pub steps: Option<u64>,
     /// CFL factor: dt = cfl * spacing / max speed. In (0, 1].
@@ -119,7 +126,7 @@ fn default_dt_max() -> Real {
 }
 
 /// The SPH fluid.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Fluid {
     /// Particle spacing (twice the particle radius), m. The kernel support is twice this.
@@ -142,13 +149,15 @@ fn default_density() -> Real {
 }
 
 /// Outputs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
     /// Output folder; `out/<scene name>` when left out. `eddy run --out` overrides it.
     #[serde(default)]
     pub dir: Option<PathBuf>,
-    /// Simulated time between frames, s (the first frame is t = 0).
+    /// Simulated time between frames, s (the first frame is t = 0). Frame k is written at
+    /// exactly k x interval: the steps before each frame time are shortened as before the end
+    /// time, whether or not frames are written, so the output formats do not change the run.
     #[serde(default = "default_interval")]
     pub interval: Real,
     /// Write one VTK file per frame plus a `particles.pvd` series for ParaView.

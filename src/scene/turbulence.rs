@@ -7,10 +7,6 @@ use crate::abl::TurbulenceParams;
 use crate::geometry::RigidBody;
 use crate::Real;
 
-/// Most children per split: beyond it a cascade step makes particles faster than any scene
-/// can use.
-const MAX_CHILDREN: usize = 8;
-
 impl Scene {
     /// The obstacles with a database, with their index among the bodies (container first).
     pub fn abl_obstacles(&self) -> impl Iterator<Item = (usize, &Body)> {
@@ -102,48 +98,23 @@ impl Scene {
 
 /// `on_particles`: the stage drives SPH particles (a scene without a grid).
 fn check_params(c: &Checker, t: &TurbulenceParams, on_particles: bool) -> Result<(), SceneError> {
-    c.num("turbulence.c_p", t.c_p, Interval::ge(0.0).note("1/s"))?;
+    c.ranged("turbulence.c_p", t.c_p)?;
     if let Some(u0) = t.u0 {
-        c.num("turbulence.u0", u0, Interval::gt(0.0).note("m/s"))?;
+        c.ranged("turbulence.u0", u0)?;
     }
-    c.num("turbulence.gain", t.gain, Interval::ge(0.0))?;
+    c.ranged("turbulence.gain", t.gain)?;
     let dissipation = t.dissipation(on_particles);
-    c.num(
-        "turbulence.dissipation_radius",
-        dissipation,
-        Interval::ge(0.0).note("cells"),
-    )?;
+    c.ranged("turbulence.dissipation_radius", dissipation)?;
     c.num(
         "turbulence.r_max",
         t.r_max,
         Interval::ge(dissipation.max(0.5))
-            .note("cells, at least the dissipation radius (smaller particles would vanish)"),
+            .noted("cells, at least the dissipation radius (smaller particles would vanish)"),
     )?;
-    c.num(
-        "turbulence.split_radius",
-        t.split_radius,
-        Interval::ge(0.0).note("cells"),
-    )?;
-    c.num(
-        "turbulence.cascade_time",
-        t.cascade_time,
-        Interval::ge(0.0).note("s/m^(2/3)"),
-    )?;
-    if !(1..=2).contains(&t.upsample) {
-        return Err(c.invalid(
-            "turbulence.upsample",
-            t.upsample,
-            "1 or 2 (Pfaff et al. 2009, Table 1)",
-        ));
-    }
-    if !(2..=MAX_CHILDREN).contains(&t.children) {
-        return Err(c.invalid(
-            "turbulence.children",
-            t.children,
-            format!("2 to {MAX_CHILDREN}"),
-        ));
-    }
-    Ok(())
+    c.ranged("turbulence.split_radius", t.split_radius)?;
+    c.ranged("turbulence.cascade_time", t.cascade_time)?;
+    c.count("turbulence.upsample", t.upsample as u64)?;
+    c.count("turbulence.children", t.children as u64)
 }
 
 /// The fastest surface speed of `body`: keyframed paths by their fastest segment.

@@ -6,12 +6,10 @@ use std::fmt;
 use std::path::Path;
 
 use super::load::base_dir;
+pub(super) use super::ranges::Interval;
+use super::ranges::{entry, pattern, KeyRange};
 use super::{Body, Domain, Motion, Number, Probe, Scene, SceneError, Shape};
 use crate::Real;
-
-/// Largest `pressure.max_iterations`: beyond it a solve that does not converge never ends in
-/// practice.
-const MAX_ITERATIONS: u32 = 100_000;
 
 impl Scene {
     /// Checks every value against its allowed range; `file` is named in the error. The first
@@ -25,13 +23,13 @@ impl Scene {
             let extent = (0..3)
                 .map(|i| self.domain.max[i] - self.domain.min[i])
                 .fold(Real::INFINITY, Real::min);
-            c.num("fluid.spacing", fluid.spacing, Interval::gt(0.0))?;
+            c.ranged("fluid.spacing", fluid.spacing)?;
             c.num(
                 "fluid.spacing",
                 fluid.spacing,
-                Interval::le(extent / 4.0).note("a quarter of the smallest domain extent"),
+                Interval::le(extent / 4.0).noted("a quarter of the smallest domain extent"),
             )?;
-            c.num("fluid.density", fluid.density, Interval::gt(0.0))?;
+            c.ranged("fluid.density", fluid.density)?;
             if fluid.blocks.is_empty() && fluid.inflow.is_empty() {
                 return Err(c.invalid(
                     "fluid.blocks",
@@ -73,7 +71,7 @@ impl Scene {
                 c.thick_enough(&format!("{key}.shape"), &body.shape, fluid.spacing)?;
             }
             if let Some(nu) = body.wall_viscosity {
-                c.num(&format!("{key}.wall_viscosity"), nu, Interval::ge(0.0))?;
+                c.ranged(&format!("{key}.wall_viscosity"), nu)?;
                 if self.fluid.is_none() {
                     return Err(c.invalid(
                         format!("{key}.wall_viscosity"),
@@ -110,12 +108,8 @@ impl Scene {
             .validate()
             .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;
         self.validate_probes(&c)?;
-        c.num("output.interval", self.output.interval, Interval::gt(0.0))?;
-        c.num(
-            "output.compression",
-            Real::from(self.output.compression),
-            Interval::closed(0.0, 9.0).note("a deflate level, 0 for none"),
-        )?;
+        c.ranged("output.interval", self.output.interval)?;
+        c.ranged("output.compression", Real::from(self.output.compression))?;
         let mut metrics = HashSet::new();
         for (i, metric) in self.output.metrics.iter().enumerate() {
             if !metrics.insert(metric) {
@@ -141,24 +135,24 @@ impl Scene {
             ));
         }
         if let Some(end) = time.end {
-            c.num("time.end", end, Interval::gt(0.0))?;
+            c.ranged("time.end", end)?;
         }
-        if time.steps == Some(0) {
-            return Err(c.invalid("time.steps", 0, ">= 1"));
+        if let Some(steps) = time.steps {
+            c.count("time.steps", steps)?;
         }
-        c.num("time.cfl", time.cfl, Interval::open_closed(0.0, 1.0))?;
-        c.num("time.dt_min", time.dt_min, Interval::gt(0.0))?;
+        c.ranged("time.cfl", time.cfl)?;
+        c.ranged("time.dt_min", time.dt_min)?;
         c.num(
             "time.dt_max",
             time.dt_max,
-            Interval::ge(time.dt_min).note("`time.dt_min`"),
+            Interval::ge(time.dt_min).noted("`time.dt_min`"),
         )?;
         if let Some(dt) = time.dt {
             c.num(
                 "time.dt",
                 dt,
                 Interval::closed(time.dt_min, time.dt_max)
-                    .note("from `time.dt_min` to `time.dt_max`"),
+                    .noted("from `time.dt_min` to `time.dt_max`"),
             )?;
         }
         Ok(())
@@ -166,33 +160,21 @@ impl Scene {
 
     fn validate_solvers(&self, c: &Checker) -> Result<(), SceneError> {
         let p = &self.pressure;
-        c.num(
-            "pressure.density_tolerance",
-            p.density_tolerance,
-            Interval::open_closed(0.0, 0.1),
-        )?;
-        c.num(
-            "pressure.divergence_tolerance",
-            p.divergence_tolerance,
-            Interval::open_closed(0.0, 1.0),
-        )?;
-        c.num(
-            "pressure.max_iterations",
-            Real::from(p.max_iterations),
-            Interval::closed(1.0, Real::from(MAX_ITERATIONS)),
-        )?;
+        c.ranged("pressure.density_tolerance", p.density_tolerance)?;
+        c.ranged("pressure.divergence_tolerance", p.divergence_tolerance)?;
+        c.ranged("pressure.max_iterations", Real::from(p.max_iterations))?;
         c.num(
             "pressure.min_iterations",
             Real::from(p.min_iterations),
             Interval::closed(1.0, Real::from(p.max_iterations))
-                .note("1 to `pressure.max_iterations`"),
+                .noted("1 to `pressure.max_iterations`"),
         )?;
         if let Some(least) = p.divergence_min_iterations {
             c.num(
                 "pressure.divergence_min_iterations",
                 Real::from(least),
                 Interval::closed(1.0, Real::from(p.max_iterations))
-                    .note("1 to `pressure.max_iterations`"),
+                    .noted("1 to `pressure.max_iterations`"),
             )?;
         }
         if p.signed && p.solver != crate::sph::PressureSolverKind::Dfsph {
@@ -202,11 +184,11 @@ impl Scene {
                 "false with `pressure.solver = \"iisph\"`: signed pressure is a DFSPH solve",
             ));
         }
-        c.num("pressure.ambient", p.ambient, Interval::ge(0.0))?;
+        c.ranged("pressure.ambient", p.ambient)?;
         let v = &self.viscosity;
-        c.num("viscosity.kinematic", v.kinematic, Interval::ge(0.0))?;
-        c.num("viscosity.boundary", v.boundary, Interval::ge(0.0))?;
-        c.num("viscosity.xsph", v.xsph, Interval::closed(0.0, 1.0))?;
+        c.ranged("viscosity.kinematic", v.kinematic)?;
+        c.ranged("viscosity.boundary", v.boundary)?;
+        c.ranged("viscosity.xsph", v.xsph)?;
         let spacing = self.fluid.as_ref().map(|f| f.spacing).filter(|s| *s > 0.0);
         let walls = super::build::wall_viscosities(self);
         let limit =
@@ -269,7 +251,7 @@ impl Scene {
             }
             match probe {
                 Probe::Front { origin, .. } => {
-                    c.num(&format!("{key}.origin"), *origin, Interval::any())?;
+                    c.ranged(&format!("{key}.origin"), *origin)?;
                 }
                 Probe::Line {
                     from, to, points, ..
@@ -277,9 +259,7 @@ impl Scene {
                     for (end, point) in [("from", from), ("to", to)] {
                         self.point_inside(c, &format!("{key}.{end}"), point)?;
                     }
-                    if !(2..=100_000).contains(points) {
-                        return Err(c.invalid(format!("{key}.points"), points, "2 to 100000"));
-                    }
+                    c.count(&format!("{key}.points"), *points as u64)?;
                 }
                 Probe::Force { body, .. } => {
                     if !self
@@ -316,7 +296,7 @@ impl Scene {
                 &format!("{key}[{axis}]"),
                 x,
                 Interval::closed(self.domain.min[axis], self.domain.max[axis])
-                    .note("inside the domain"),
+                    .noted("inside the domain"),
             )?;
         }
         Ok(())
@@ -368,8 +348,10 @@ impl Checker<'_> {
         }
     }
 
-    /// Checks that `value` is finite and inside `allowed`.
+    /// Checks that `value` is finite and inside `allowed`, a range computed from other values;
+    /// the key's entry in `RANGES` says the rule in words.
     pub(super) fn num(&self, key: &str, value: Real, allowed: Interval) -> Result<(), SceneError> {
+        self.entry(key);
         if value.is_finite() && allowed.contains(value) {
             Ok(())
         } else {
@@ -377,11 +359,39 @@ impl Checker<'_> {
         }
     }
 
+    /// Checks that `value` is finite and inside the key's range in `RANGES`.
+    pub(super) fn ranged(&self, key: &str, value: Real) -> Result<(), SceneError> {
+        self.num(key, value, self.range(key))
+    }
+
+    /// Checks a count against the key's range in `RANGES`; the message shows it as an integer.
+    pub(super) fn count(&self, key: &str, n: u64) -> Result<(), SceneError> {
+        let allowed = self.range(key);
+        if allowed.contains(n as Real) {
+            Ok(())
+        } else {
+            Err(self.invalid(key, n, allowed.describe(false)))
+        }
+    }
+
+    /// Checks that each component is finite (and in the key's range).
     pub(super) fn vec3(&self, key: &str, v: [Real; 3]) -> Result<(), SceneError> {
         for (axis, &x) in v.iter().enumerate() {
-            self.num(&format!("{key}[{axis}]"), x, Interval::any())?;
+            self.ranged(&format!("{key}[{axis}]"), x)?;
         }
         Ok(())
+    }
+
+    /// The key's entry; a check of a key without one is a bug the tests catch (every scene
+    /// they validate would panic here).
+    fn entry(&self, key: &str) -> &'static KeyRange {
+        entry(&pattern(key)).unwrap_or_else(|| panic!("no RANGES entry for `{}`", pattern(key)))
+    }
+
+    fn range(&self, key: &str) -> Interval<'static> {
+        self.entry(key)
+            .range
+            .unwrap_or_else(|| panic!("the RANGES entry of `{}` has no range", pattern(key)))
     }
 
     fn domain(&self, domain: &Domain) -> Result<(), SceneError> {
@@ -391,7 +401,7 @@ impl Checker<'_> {
             self.num(
                 &format!("domain.max[{axis}]"),
                 domain.max[axis],
-                Interval::gt(domain.min[axis]).note(&format!("`domain.min[{axis}]`")),
+                Interval::gt(domain.min[axis]).noted(&format!("`domain.min[{axis}]`")),
             )?;
         }
         Ok(())
@@ -407,13 +417,13 @@ impl Checker<'_> {
     ) -> Result<(), SceneError> {
         for axis in 0..3 {
             let domain_axis =
-                || Interval::closed(domain.min[axis], domain.max[axis]).note("inside the domain");
+                || Interval::closed(domain.min[axis], domain.max[axis]).noted("inside the domain");
             self.num(&format!("{key}.min[{axis}]"), min[axis], domain_axis())?;
             self.num(&format!("{key}.max[{axis}]"), max[axis], domain_axis())?;
             self.num(
                 &format!("{key}.max[{axis}]"),
                 max[axis],
-                Interval::gt(min[axis]).note(&format!("`{key}.min[{axis}]`")),
+                Interval::gt(min[axis]).noted(&format!("`{key}.min[{axis}]`")),
             )?;
         }
         Ok(())
@@ -431,10 +441,10 @@ impl Checker<'_> {
 
     pub(super) fn shape(&self, key: &str, shape: &Shape) -> Result<(), SceneError> {
         for (name, v) in half_sizes(shape) {
-            self.num(&format!("{key}.{name}"), v, Interval::gt(0.0))?;
+            self.ranged(&format!("{key}.{name}"), v)?;
         }
         if let Shape::Mesh { path, scale } = shape {
-            self.num(&format!("{key}.scale"), *scale, Interval::gt(0.0))?;
+            self.ranged(&format!("{key}.scale"), *scale)?;
             // `load` made the path absolute; resolve again for scenes built in code.
             let resolved = base_dir(self.file).join(path);
             if resolved.is_dir() {
@@ -476,7 +486,7 @@ impl Checker<'_> {
                 &format!("{key}.{name}"),
                 v,
                 Interval::ge(0.5 * spacing)
-                    .note("half the fluid spacing: a body thinner than a spacing has no inside"),
+                    .noted("half the fluid spacing: a body thinner than a spacing has no inside"),
             )?;
         }
         Ok(())
@@ -495,11 +505,12 @@ impl Checker<'_> {
         let mut previous: Option<Real> = None;
         for (i, frame) in motion.keyframes.iter().enumerate() {
             let k = format!("{key}.keyframes[{i}]");
+            let note;
             let allowed = match previous {
-                Some(t) => Interval::gt(t).note(&format!(
-                    "`{key}.keyframes[{}].t` (times strictly increasing)",
-                    i - 1
-                )),
+                Some(t) => {
+                    note = format!("`{key}.keyframes[{}].t` (times strictly increasing)", i - 1);
+                    Interval::gt(t).noted(&note)
+                }
                 None => Interval::any(),
             };
             self.num(&format!("{k}.t"), frame.t, allowed)?;
@@ -508,108 +519,5 @@ impl Checker<'_> {
             previous = Some(frame.t);
         }
         Ok(())
-    }
-}
-
-/// One end of an interval.
-#[derive(Clone, Copy)]
-enum Bound {
-    Open(Real),
-    Closed(Real),
-    Unbounded,
-}
-
-/// An allowed range of a number, with an optional note on where its ends come from.
-pub(super) struct Interval {
-    lo: Bound,
-    hi: Bound,
-    note: Option<String>,
-}
-
-impl Interval {
-    fn new(lo: Bound, hi: Bound) -> Self {
-        Self { lo, hi, note: None }
-    }
-    pub(super) fn any() -> Self {
-        Self::new(Bound::Unbounded, Bound::Unbounded)
-    }
-    pub(super) fn gt(lo: Real) -> Self {
-        Self::new(Bound::Open(lo), Bound::Unbounded)
-    }
-    pub(super) fn ge(lo: Real) -> Self {
-        Self::new(Bound::Closed(lo), Bound::Unbounded)
-    }
-    pub(super) fn le(hi: Real) -> Self {
-        Self::new(Bound::Unbounded, Bound::Closed(hi))
-    }
-    pub(super) fn open_closed(lo: Real, hi: Real) -> Self {
-        Self::new(Bound::Open(lo), Bound::Closed(hi))
-    }
-    pub(super) fn closed(lo: Real, hi: Real) -> Self {
-        Self::new(Bound::Closed(lo), Bound::Closed(hi))
-    }
-    pub(super) fn open(lo: Real, hi: Real) -> Self {
-        Self::new(Bound::Open(lo), Bound::Open(hi))
-    }
-    /// Says where a bound comes from, e.g. "`domain.min[0]`".
-    pub(super) fn note(mut self, note: &str) -> Self {
-        self.note = Some(note.to_owned());
-        self
-    }
-
-    fn contains(&self, v: Real) -> bool {
-        let above = match self.lo {
-            Bound::Open(lo) => v > lo,
-            Bound::Closed(lo) => v >= lo,
-            Bound::Unbounded => true,
-        };
-        let below = match self.hi {
-            Bound::Open(hi) => v < hi,
-            Bound::Closed(hi) => v <= hi,
-            Bound::Unbounded => true,
-        };
-        above && below
-    }
-
-    /// The allowed range in words: `(0, 1]`, `> 0`, `a finite number >= 0`.
-    fn describe(&self, say_finite: bool) -> String {
-        let range = match (self.lo, self.hi) {
-            (Bound::Unbounded, Bound::Unbounded) => String::new(),
-            (Bound::Open(lo), Bound::Unbounded) => format!("> {}", Number(lo)),
-            (Bound::Closed(lo), Bound::Unbounded) => format!(">= {}", Number(lo)),
-            (Bound::Unbounded, Bound::Open(hi)) => format!("< {}", Number(hi)),
-            (Bound::Unbounded, Bound::Closed(hi)) => format!("<= {}", Number(hi)),
-            (lo, hi) => {
-                let (open, a) = match lo {
-                    Bound::Open(a) => ('(', a),
-                    Bound::Closed(a) => ('[', a),
-                    Bound::Unbounded => ('(', Real::NEG_INFINITY),
-                };
-                let (close, b) = match hi {
-                    Bound::Open(b) => (')', b),
-                    Bound::Closed(b) => (']', b),
-                    Bound::Unbounded => (')', Real::INFINITY),
-                };
-                format!("{open}{}, {}{close}", Number(a), Number(b))
-            }
-        };
-        let mut out = match (say_finite || range.is_empty(), range.is_empty()) {
-            (true, true) => "a finite number".to_owned(),
-            (true, false) => format!("a finite number {}", in_words(&range)),
-            (false, _) => range,
-        };
-        if let Some(note) = &self.note {
-            out.push_str(&format!(" ({note})"));
-        }
-        out
-    }
-}
-
-/// "in [a, b]" for an interval, the comparison itself otherwise.
-fn in_words(range: &str) -> String {
-    if range.starts_with(['(', '[']) {
-        format!("in {range}")
-    } else {
-        range.to_owned()
     }
 }

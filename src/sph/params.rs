@@ -2,6 +2,7 @@
 //! `[pressure]` and `[viscosity]` sections deserialize into the section types here, and
 //! the scene builder (`src/scene/build.rs`) assembles a [`SphParams`] from a resolved scene.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::stepping::StepLimits;
@@ -35,7 +36,7 @@ pub struct SphParams {
 }
 
 /// A side of the domain box.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DomainSide {
     XMin,
@@ -92,7 +93,7 @@ impl DomainSide {
 
 /// An inflow emitter: a rectangle on a side of the domain through which fluid enters at a
 /// prescribed velocity (see `super::open`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Inflow {
     /// The domain side it sits on.
@@ -114,7 +115,7 @@ pub struct Inflow {
 
 /// How an inflow's velocity varies over its rectangle (s, t: the position across it along
 /// its two axes, from 0 to 1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum InflowShape {
     /// The same velocity everywhere.
@@ -148,7 +149,7 @@ impl Inflow {
 }
 
 /// An outflow side: particles that cross it leave the simulation.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Outflow {
     /// The domain side.
@@ -156,7 +157,7 @@ pub struct Outflow {
 }
 
 /// A box of fluid.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
     /// Lower corner, m.
@@ -169,7 +170,7 @@ pub struct FluidBlock {
 }
 
 /// Which pressure solver runs.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PressureSolverKind {
     /// Divergence-free SPH (Bender & Koschier 2015/2017).
@@ -180,7 +181,7 @@ pub enum PressureSolverKind {
 }
 
 /// Pressure solver settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Pressure {
     /// `dfsph` or `iisph`.
@@ -265,14 +266,15 @@ fn default_max_iterations() -> u32 {
 }
 
 /// Viscosity settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Viscosity {
     /// Kinematic viscosity of the Laplacian form (Liu et al. 2021 Eq. 4), m^2/s.
     #[serde(default)]
     pub kinematic: Real,
     /// Kinematic viscosity against boundary particles, m^2/s: the walls' no-slip strength,
-    /// for every body that does not set its own `wall_viscosity`.
+    /// for every body that does not set its own `wall_viscosity`. Equal to `kinematic` is a
+    /// no-slip wall, 0 free slip.
     #[serde(default)]
     pub boundary: Real,
     /// XSPH velocity smoothing factor in [0, 1].

@@ -30,14 +30,7 @@ pub struct KeyRow {
 
 /// Every key of a scene file, in the order of the structs' fields.
 pub fn rows() -> Vec<KeyRow> {
-    let schema = schemars::schema_for!(Scene);
-    let root = schema.as_value();
-    let defs = root.get("$defs").and_then(Value::as_object);
-    let walker = Walker {
-        defs: defs.cloned().unwrap_or_default(),
-    };
-    let mut rows = Vec::new();
-    walker.properties("", root, &mut rows);
+    let mut rows = Walker::rows("", &schemars::schema_for!(Scene));
     rows.extend(refinement_rows());
     rows
 }
@@ -64,15 +57,7 @@ fn refinement_rows() -> Vec<KeyRow> {
     }];
     let mut keys: Vec<(KeyRow, Vec<&str>)> = Vec::new();
     for method in &methods {
-        let schema = method.schema();
-        let root = schema.as_value();
-        let defs = root.get("$defs").and_then(Value::as_object);
-        let walker = Walker {
-            defs: defs.cloned().unwrap_or_default(),
-        };
-        let mut own = Vec::new();
-        walker.properties("refinement", root, &mut own);
-        for mut row in own {
+        for mut row in Walker::rows("refinement", &method.schema()) {
             let range = method
                 .ranges
                 .iter()
@@ -211,6 +196,18 @@ struct Walker {
 }
 
 impl Walker {
+    /// The rows of the keys of the table `schema` describes, under `prefix`.
+    fn rows(prefix: &str, schema: &schemars::Schema) -> Vec<KeyRow> {
+        let root = schema.as_value();
+        let defs = root.get("$defs").and_then(Value::as_object);
+        let walker = Walker {
+            defs: defs.cloned().unwrap_or_default(),
+        };
+        let mut rows = Vec::new();
+        walker.properties(prefix, root, &mut rows);
+        rows
+    }
+
     fn resolve<'a>(&'a self, node: &'a Value) -> &'a Value {
         match node.get("$ref").and_then(Value::as_str) {
             Some(r) => r

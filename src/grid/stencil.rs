@@ -80,24 +80,35 @@ impl Problem {
     /// The Dirichlet terms along `axis` of unknown `c` with their faces' weights (the sides with
     /// theirs), as its weighted diagonal counts them.
     pub fn weighted_dirichlet(&self, axis: usize, c: [usize; 3]) -> f32 {
-        let l = &self.layout;
-        let idx = l.index(c[0], c[1], c[2]);
         let mut sum = 0.0;
-        for (side, up) in [false, true].into_iter().enumerate() {
-            match l.step(axis, c[axis], up) {
-                Some(s) => {
-                    let mut nb = c;
-                    nb[axis] = s;
-                    let j = l.index(nb[0], nb[1], nb[2]);
-                    if self.kinds[j] == DIRICHLET {
-                        sum += self.weight(axis, if up { idx } else { j });
-                    }
-                }
-                None if !l.periodic[axis] => sum += f32::from(self.side_weight[axis][side]),
-                None => {}
+        for face in self.faces(axis, c).into_iter().flatten() {
+            match face {
+                Face::Cell { kind, weight } if kind == DIRICHLET => sum += weight,
+                Face::Cell { .. } => {}
+                Face::Side(weight) => sum += f32::from(weight),
             }
         }
         sum
+    }
+
+    /// The two faces of cell `c` along `axis`, low then high: the cell beyond with the face's
+    /// weight, or the domain's side with its ghost's weight (None across a periodic side).
+    fn faces(&self, axis: usize, c: [usize; 3]) -> [Option<Face>; 2] {
+        let l = &self.layout;
+        let idx = l.index(c[0], c[1], c[2]);
+        [false, true].map(|up| match l.step(axis, c[axis], up) {
+            Some(s) => {
+                let mut nb = c;
+                nb[axis] = s;
+                let j = l.index(nb[0], nb[1], nb[2]);
+                Some(Face::Cell {
+                    kind: self.kinds[j],
+                    weight: self.weight(axis, if up { idx } else { j }),
+                })
+            }
+            None if !l.periodic[axis] => Some(Face::Side(self.side_weight[axis][usize::from(up)])),
+            None => None,
+        })
     }
 
     /// Per-axis Dirichlet weights of every cell, computed once for the builders.
@@ -160,29 +171,29 @@ impl Problem {
     /// The weighted sum of an unknown's coupled and Dirichlet faces (sides with their weight),
     /// and whether any of those faces weighs other than one.
     fn weighted_count(&self, c: [usize; 3]) -> (f64, bool) {
-        let l = &self.layout;
-        let idx = l.index(c[0], c[1], c[2]);
         let (mut sum, mut weighted) = (0.0, false);
         for axis in 0..3 {
-            for (side, up) in [false, true].into_iter().enumerate() {
-                match l.step(axis, c[axis], up) {
-                    Some(s) => {
-                        let mut nb = c;
-                        nb[axis] = s;
-                        let j = l.index(nb[0], nb[1], nb[2]);
-                        let w = self.weight(axis, if up { idx } else { j });
-                        if self.kinds[j] != SOLID && w > 0.0 {
-                            sum += f64::from(w);
-                            weighted |= w != 1.0;
-                        }
+            for face in self.faces(axis, c).into_iter().flatten() {
+                match face {
+                    Face::Cell { kind, weight } if kind != SOLID && weight > 0.0 => {
+                        sum += f64::from(weight);
+                        weighted |= weight != 1.0;
                     }
-                    None if !l.periodic[axis] => sum += f64::from(self.side_weight[axis][side]),
-                    None => {}
+                    Face::Cell { .. } => {}
+                    Face::Side(weight) => sum += f64::from(weight),
                 }
             }
         }
         (sum, weighted)
     }
+}
+
+/// One face of a cell ([`Problem::faces`]).
+enum Face {
+    /// Towards the cell beyond, of that kind, with the face's weight.
+    Cell { kind: u8, weight: f32 },
+    /// On a domain side that is not periodic, with its ghost's weight.
+    Side(u8),
 }
 
 /// Per-axis Dirichlet weights of the cells (`None`: zero everywhere).

@@ -53,16 +53,12 @@ pub const METHOD: Method = Method::new::<Params>(
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// Core-radius factor beta: r_c = beta sqrt(4 alpha_Oseen nu dt) (Wang et al. 2020 Eq. 11).
-    #[serde(default = "one")]
+    #[serde(default = "super::registry::one")]
     pub beta: Real,
     /// The wall samples take part in the method's difference operators. It models no-slip
     /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
-}
-
-fn one() -> Real {
-    1.0
 }
 
 impl MethodParams for Params {

@@ -167,6 +167,11 @@ where
     Ok(Box::new(toml::Value::Table(keys).try_into::<P>()?))
 }
 
+/// The default of a gain whose ideal value is one (Rankine's beta, VRSPH's alpha).
+pub(super) fn one() -> Real {
+    1.0
+}
+
 fn schema_of<P: JsonSchema>() -> schemars::Schema {
     schemars::schema_for!(P)
 }

@@ -59,16 +59,12 @@ pub const METHOD: Method = Method::new::<Params>(
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// Gain alpha of the velocity refinement (Liu et al. 2021 Eq. 17); 1 is the ideal refinement.
-    #[serde(default = "one")]
+    #[serde(default = "super::registry::one")]
     pub alpha: Real,
     /// The wall samples take part in the method's difference operators. It models no-slip
     /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
     #[serde(default)]
     pub walls: bool,
-}
-
-fn one() -> Real {
-    1.0
 }
 
 impl MethodParams for Params {

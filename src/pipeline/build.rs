@@ -2,25 +2,21 @@
 //! outputs it writes. A stage that nothing in the scene needs is not built, so it cannot run.
 
 use std::path::Path;
-use std::time::Instant;
 
 use super::footprint::{available_memory, Footprint};
-use super::frames::{GridFrames, Kind, ParticleFrames, VortexFrames, VortexValues};
 use super::order::{self, SceneKind};
-use super::simulation::{Simulation, StepError};
-use super::stages::{Stage, StepRecord};
+use super::outputs::Outputs;
+use super::simulation::Simulation;
+use super::stages::Stage;
 use super::RunError;
 use crate::geometry::RigidBody;
 use crate::grid::{GridError, GridSolver};
-use crate::io::read_velocity;
-use crate::io::{write_includes, write_links, AttrValue, IoError, VtkOptions};
+use crate::io::{read_velocity, IoError};
 use crate::metrics::Probe;
 use crate::scene::{build, Scene};
 use crate::sph::SphSolver;
-use crate::stepping::towards_end;
-use crate::{Real, Vec3};
 
-/// A scene ready to step: the simulation, its stages in order and its frame writers.
+/// A scene ready to step: the simulation, its stages in order and its outputs.
 pub struct Pipeline {
     /// The memory estimate the scene was admitted with.
     pub footprint: Footprint,
@@ -28,144 +24,10 @@ pub struct Pipeline {
     /// Which solvers the scene runs and whether they exchange anything.
     pub kind: SceneKind,
     pub stages: Vec<Box<dyn Stage>>,
-    pub frames: Frames,
-    /// Grid line probes, written as `profile_NAME.csv` at the end: (name, from, to, points).
-    pub profiles: Vec<(String, Vec3, Vec3, usize)>,
+    /// What is written at frame times and at the end (VTK, HDF5, ...).
+    pub outputs: Outputs,
     /// Wall time each stage has run for so far, s, in the order of `stages`.
     pub stage_seconds: Vec<f64>,
-}
-
-/// The frame writers a scene asked for, opened with [`Pipeline::open`].
-pub struct Frames {
-    /// Simulated time between frames, s.
-    pub interval: Real,
-    pub vtk: bool,
-    /// How the VTK files store their arrays (`output.precision`, `output.compression`).
-    pub vtk_options: VtkOptions,
-    pub hdf5: bool,
-    /// Deflate level of the HDF5 datasets (`output.compression`).
-    pub compression: u8,
-    attrs: Vec<(&'static str, AttrValue)>,
-    both: bool,
-    pub particles: Option<ParticleFrames>,
-    pub grid: Option<GridFrames>,
-    /// The grid's and the fluid's vortex particles.
-    pub vortices: [Option<VortexFrames>; 2],
-}
-
-/// The file names of the grid's and the fluid's vortex particles, where they have them:
-/// `vortices`, or `grid_vortices` and `particles_vortices` when both do.
-fn vortex_sets(sim: &Simulation) -> [Option<String>; 2] {
-    let both = sim.grid_turbulence.is_some() && sim.sph_turbulence.is_some();
-    [
-        (&sim.grid_turbulence, Kind::Grid),
-        (&sim.sph_turbulence, Kind::Particles),
-    ]
-    .map(|(t, kind)| t.as_ref().map(|_| kind.file("vortices", both)))
-}
-
-impl Frames {
-    /// Writes one frame of every solver, with each medium's vortex particles.
-    pub fn write(&mut self, sim: &Simulation) -> Result<(), IoError> {
-        let values = [&sim.grid_turbulence, &sim.sph_turbulence]
-            .map(|t| t.as_ref().map(|t| VortexValues::of(&t.vortices)));
-        let [grid_set, fluid_set] = values
-            .each_ref()
-            .map(|v| v.as_ref().map(|v| v.frame(sim.steps, sim.time)));
-        if let (Some(w), Some(sph)) = (self.particles.as_mut(), sim.sph.as_ref()) {
-            w.write(sph, fluid_set.as_ref())?;
-        }
-        if let (Some(w), Some(grid)) = (self.grid.as_mut(), sim.grid.as_ref()) {
-            w.write(grid, sim.grid_turbulence.as_ref(), grid_set.as_ref())?;
-        }
-        for (w, set) in self.vortices.iter_mut().zip([grid_set, fluid_set]) {
-            if let (Some(w), Some(set)) = (w, set) {
-                w.write(&set)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Frames written so far (of the kind written most: both kinds are written together).
-    pub fn count(&self) -> usize {
-        let p = self.particles.as_ref().map_or(0, |w| w.count());
-        let g = self.grid.as_ref().map_or(0, |w| w.count());
-        p.max(g)
-    }
-
-    /// The plan's lines on the frames: (name, what is written).
-    pub fn describe(&self, sim: &Simulation) -> Vec<(&'static str, String)> {
-        let mut out = Vec::new();
-        let kinds = [
-            (sim.sph.is_some(), Kind::Particles, "particles"),
-            (sim.grid.is_some(), Kind::Grid, "grid"),
-        ];
-        let with_vortices = |kind: &Kind| match kind {
-            Kind::Particles => sim.sph_turbulence.is_some(),
-            Kind::Grid => sim.grid_turbulence.is_some(),
-        };
-        for name in vortex_sets(sim).into_iter().flatten() {
-            if self.vtk {
-                out.push((
-                    "vtk",
-                    format!("vortex particles + {name}.pvd every {} s", self.interval),
-                ));
-            }
-        }
-        for (_, kind, name) in kinds.iter().filter(|k| k.0) {
-            if self.vtk {
-                out.push((
-                    "vtk",
-                    format!("VTK frames + {name}.pvd every {} s", self.interval),
-                ));
-            }
-            if self.hdf5 {
-                out.push((
-                    "hdf5",
-                    format!(
-                        "{} ({name}{}) every {} s",
-                        kind.file("frames.h5", self.both),
-                        if with_vortices(kind) {
-                            ", vortex particles in each frame's group `vortices`"
-                        } else {
-                            ""
-                        },
-                        self.interval
-                    ),
-                ));
-            }
-        }
-        if self.hdf5 && self.both {
-            out.push((
-                "hdf5",
-                "frames.h5: /particles and /grid, links to both series, open together".into(),
-            ));
-        }
-        let fine = sim
-            .grid
-            .as_ref()
-            .and_then(|g| g.smoke.as_ref()?.fine.as_ref());
-        if let Some(fine) = fine.filter(|_| self.vtk || self.hdf5) {
-            let files = [
-                (self.vtk, "VTK frames + smoke_fine.pvd"),
-                (self.hdf5, "smoke_fine.h5"),
-            ]
-            .iter()
-            .filter(|f| f.0)
-            .map(|f| f.1)
-            .collect::<Vec<_>>()
-            .join(", ");
-            out.push((
-                "smoke",
-                format!(
-                    "{files}: smoke on its {:?} grid every {} s (the grid frames hold its cell \
-                     means)",
-                    fine.mac.dims, self.interval
-                ),
-            ));
-        }
-        out
-    }
 }
 
 /// The SPH fluid of `scene` with its bodies and its refinement attached as a step hook.
@@ -271,138 +133,28 @@ impl Pipeline {
     pub fn build(scene: &Scene) -> Result<Self, RunError> {
         let (bodies, footprint) = admit(scene)?;
         let (has_sph, has_grid) = (scene.fluid.is_some(), scene.grid.is_some());
-        let both = has_sph && has_grid;
         let sph = has_sph
             .then(|| sph_among(scene, bodies.clone()))
             .transpose()?;
         let grid = has_grid.then(|| grid_among(scene, bodies)).transpose()?;
         let mut sim = Simulation::new(sph, grid);
         let (kind, stages) = order::stages(scene, &mut sim)?;
-        let profiles = scene
-            .probes
-            .iter()
-            .filter_map(|p| match p {
-                Probe::Line {
-                    name,
-                    from,
-                    to,
-                    points,
-                } if sim.grid.is_some() => {
-                    Some((name.clone(), Vec3::from(*from), Vec3::from(*to), *points))
-                }
-                _ => None,
-            })
-            .collect();
-        let out = &scene.output;
-        let frames = Frames {
-            interval: out.interval,
-            vtk: out.vtk,
-            vtk_options: VtkOptions {
-                precision: out.precision,
-                compression: out.compression,
-            },
-            hdf5: out.hdf5,
-            compression: out.compression,
-            attrs: vec![
-                ("scene", AttrValue::Str(scene.name.clone())),
-                ("seed", AttrValue::Int(scene.seed as i64)),
-            ],
-            both,
-            particles: None,
-            grid: None,
-            vortices: [None, None],
-        };
+        let outputs = Outputs::build(&build::output_spec(scene), &sim)?;
         Ok(Self {
             footprint,
             sim,
             kind,
             stages,
-            frames,
-            profiles,
+            outputs,
             stage_seconds: Vec::new(),
         })
     }
 
-    /// One step: every solver's stable step, the smallest of them shortened to land on `end`,
-    /// then every stage in order with it. With `trace`, appends each stage's name and then
-    /// `name/part` for each part it ran.
-    pub fn step(
-        &mut self,
-        end: Option<Real>,
-        mut trace: Option<&mut Vec<String>>,
-    ) -> Result<StepRecord, StepError> {
-        let sim = &mut self.sim;
-        let dt = sim.stable_dt()?;
-        let dt = end.map_or(dt, |t| towards_end(dt, t - sim.time));
-        let mut rec = StepRecord {
-            step: sim.steps,
-            time: sim.time,
-            dt,
-            ..Default::default()
-        };
-        self.stage_seconds.resize(self.stages.len(), 0.0);
-        for (stage, seconds) in self.stages.iter_mut().zip(&mut self.stage_seconds) {
-            let started = Instant::now();
-            stage.run(sim, &mut rec)?;
-            *seconds += started.elapsed().as_secs_f64();
-            if let Some(trace) = trace.as_deref_mut() {
-                trace.push(stage.name().to_owned());
-                let parts = stage.ran(sim).iter();
-                trace.extend(parts.map(|part| format!("{}/{part}", stage.name())));
-            }
-        }
-        sim.time += dt;
-        sim.steps += 1;
-        Ok(rec)
-    }
-
-    /// Creates the output files of every stage and frame writer in `out`.
+    /// Creates the output files of every stage and output in `out`.
     pub fn open(&mut self, out: &Path) -> Result<(), IoError> {
         for stage in &mut self.stages {
             stage.open(&self.sim, out)?;
         }
-        let f = &mut self.frames;
-        let hdf5 = |kind: Kind| f.hdf5.then(|| kind.file("frames.h5", f.both));
-        if let Some(sph) = self.sim.sph.as_ref() {
-            let name = hdf5(Kind::Particles);
-            f.particles = Some(ParticleFrames::new(
-                out,
-                f.vtk.then_some(f.vtk_options),
-                name.as_deref().map(|n| (n, f.compression)),
-                &f.attrs,
-                sph,
-            )?);
-        }
-        if let Some(grid) = self.sim.grid.as_ref() {
-            let name = hdf5(Kind::Grid);
-            f.grid = Some(GridFrames::new(
-                out,
-                f.vtk.then_some(f.vtk_options),
-                name.as_deref().map(|n| (n, f.compression)),
-                &f.attrs,
-                grid,
-            )?);
-        }
-        if f.hdf5 && f.both {
-            // One file that opens both series: /particles and /grid link to their indexes.
-            let links = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.h5", true));
-            write_links(
-                &out.join("frames.h5"),
-                &f.attrs,
-                &[("particles", &links[0]), ("grid", &links[1])],
-            )?;
-            let series = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.xmf", true));
-            write_includes(&out.join("frames.xmf"), &[&series[0], &series[1]])?;
-        }
-        for (w, name) in f.vortices.iter_mut().zip(vortex_sets(&self.sim)) {
-            if let Some(name) = name {
-                *w = Some(VortexFrames::new(
-                    out,
-                    &name,
-                    f.vtk.then_some(f.vtk_options),
-                ));
-            }
-        }
-        Ok(())
+        self.outputs.open(&self.sim, out)
     }
 }

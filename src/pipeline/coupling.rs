@@ -34,7 +34,7 @@
 use ndarray::{s, Array3, Zip};
 use rayon::prelude::*;
 
-use super::frames::Kind;
+use super::outputs::Kind;
 use super::simulation::{Simulation, StepError};
 use super::stages::{AddedColumns, Stage, StepRecord};
 use crate::grid::mac::cell_beside;

@@ -8,14 +8,14 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::build::Pipeline;
-use super::frames::remove_earlier_outputs;
+use super::outputs::{remove_earlier_outputs, SCENE_FILE};
 use super::plan::Plan;
 use super::simulation::StepError;
 use super::stages::StepRecord;
 use super::{output_dir, RunError, RunOptions, RunSummary};
 use crate::io::{write_atomic, IoError};
-use crate::metrics::grid_probes::write_profile;
 use crate::scene::Scene;
+use crate::stepping::towards_end;
 use crate::Real;
 
 /// Times closer than this count as equal (frame times, the end time).
@@ -81,9 +81,7 @@ impl Run {
             );
         }
         let resolved = scene.to_toml();
-        write_atomic(&out.join("scene.toml"), |w| {
-            w.write_all(resolved.as_bytes())
-        })?;
+        write_atomic(&out.join(SCENE_FILE), |w| w.write_all(resolved.as_bytes()))?;
         // A scene that cannot be built (no fluid cell, a stored flow on another grid) has
         // written no frame: its error says what is wrong and nothing about frames.
         let mut pipeline = Pipeline::build(scene)?;
@@ -116,7 +114,7 @@ impl Run {
         if self.ended {
             return Ok(None);
         }
-        let interval = self.pipeline.frames.interval;
+        let interval = self.pipeline.outputs.interval;
         let frame_time = |k: u64| k as Real * interval;
         let (end, p) = (&self.end, &mut self.pipeline);
         let sim = &p.sim;
@@ -124,7 +122,7 @@ impl Run {
             || end.time.is_some_and(|t| sim.time() >= t - TIME_EPS)
             || end.steps.is_some_and(|n| sim.steps() >= n);
         if sim.time() >= frame_time(self.frame) - TIME_EPS || done {
-            p.frames.write(sim)?;
+            p.outputs.write(sim)?;
             while frame_time(self.frame) <= sim.time() + TIME_EPS {
                 self.frame += 1;
             }
@@ -137,7 +135,7 @@ impl Run {
         let target = end.time.map_or(next_frame, |t| t.min(next_frame));
         let rec = p
             .step(Some(target), trace)
-            .map_err(|e| stopped(e, p.frames.count(), &self.out))?;
+            .map_err(|e| stopped(e, p.outputs.frames(), &self.out))?;
         self.steady = end
             .steady
             .zip(rec.grid)
@@ -184,22 +182,15 @@ impl Run {
 
     /// Writes what a run writes at its end (the line probes, the time-averaged velocity) and
     /// says what it did; the trace is left empty. A run may go on stepping after it.
-    pub fn finish(&self) -> Result<RunSummary, RunError> {
+    pub fn finish(&mut self) -> Result<RunSummary, RunError> {
+        let p = &mut self.pipeline;
+        p.outputs.finish(&p.sim)?;
         let p = &self.pipeline;
-        for (name, from, to, points) in &p.profiles {
-            if let Some(grid) = p.sim.grid.as_ref() {
-                let path = self.out.join(format!("profile_{name}.csv"));
-                write_profile(grid, &path, (*from).into(), (*to).into(), *points)?;
-            }
-        }
-        if let (Some(w), Some(grid)) = (p.frames.grid.as_ref(), p.sim.grid.as_ref()) {
-            w.write_average(grid, p.frames.vtk_options)?;
-        }
         let sph = p.sim.sph.as_ref();
         Ok(RunSummary {
             steps: p.sim.steps(),
             time: p.sim.time(),
-            frames: p.frames.count(),
+            frames: p.outputs.frames(),
             fluid_particles: sph.map_or(0, |s| s.fluid.len()),
             boundary_particles: sph.map_or(0, |s| s.boundary.len()),
             grid_cells: p.sim.grid.as_ref().map_or(0, |g| g.mac.cell_count()),
@@ -208,6 +199,41 @@ impl Run {
             trace: Vec::new(),
             out: self.out.clone(),
         })
+    }
+}
+
+impl Pipeline {
+    /// One step: every solver's stable step, the smallest of them shortened to land on `end`,
+    /// then every stage in order with it. With `trace`, appends each stage's name and then
+    /// `name/part` for each part it ran.
+    pub fn step(
+        &mut self,
+        end: Option<Real>,
+        mut trace: Option<&mut Vec<String>>,
+    ) -> Result<StepRecord, StepError> {
+        let sim = &mut self.sim;
+        let dt = sim.stable_dt()?;
+        let dt = end.map_or(dt, |t| towards_end(dt, t - sim.time));
+        let mut rec = StepRecord {
+            step: sim.steps,
+            time: sim.time,
+            dt,
+            ..Default::default()
+        };
+        self.stage_seconds.resize(self.stages.len(), 0.0);
+        for (stage, seconds) in self.stages.iter_mut().zip(&mut self.stage_seconds) {
+            let started = Instant::now();
+            stage.run(sim, &mut rec)?;
+            *seconds += started.elapsed().as_secs_f64();
+            if let Some(trace) = trace.as_deref_mut() {
+                trace.push(stage.name().to_owned());
+                let parts = stage.ran(sim).iter();
+                trace.extend(parts.map(|part| format!("{}/{part}", stage.name())));
+            }
+        }
+        sim.time += dt;
+        sim.steps += 1;
+        Ok(rec)
     }
 }
 

@@ -11,8 +11,8 @@ mod build;
 mod coupling;
 mod driver;
 mod footprint;
-mod frames;
 mod order;
+pub mod outputs;
 mod plan;
 mod simulation;
 mod stages;
@@ -20,12 +20,12 @@ mod turbulence;
 
 use std::path::{Path, PathBuf};
 
-pub use build::{grid_solver, sph_solver, Frames, Pipeline};
+pub use build::{grid_solver, sph_solver, Pipeline};
 pub use coupling::{Exchange, DRAG_HEIGHT};
 pub use driver::{run_scene, Run};
 pub use footprint::{available_memory, Footprint};
-pub use frames::{GridFrames, Kind, ParticleFrames};
 pub use order::SceneKind;
+pub use outputs::{Kind, Output, OutputSpec, Outputs};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
 pub use stages::{Stage, StepRecord};

@@ -5,7 +5,7 @@
 //! metrics columns it adds reach its solver's metrics stage from here ([`Stage::adopt_columns`]).
 
 use super::coupling::{SurfaceExchange, SurfacePressure};
-use super::frames::Kind;
+use super::outputs::{Kind, METRICS_FILE, PROBES_FILE};
 use super::simulation::Simulation;
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
@@ -155,7 +155,7 @@ impl StageSet {
         let sph_probes: Built = (has_sph && !probes.is_empty()).then(|| {
             Box::new(SphProbes {
                 probes: probes.clone(),
-                file: Kind::Particles.file("probes.csv", both),
+                file: Kind::Particles.file(PROBES_FILE, both),
                 recorder: None,
             }) as Box<dyn Stage>
         });
@@ -170,7 +170,7 @@ impl StageSet {
             Box::new(GridProbes {
                 probes: probes.iter().filter(per_step).cloned().collect(),
                 bodies,
-                file: Kind::Grid.file("probes.csv", both),
+                file: Kind::Grid.file(PROBES_FILE, both),
                 recorder: None,
             }) as Box<dyn Stage>
         });
@@ -178,7 +178,7 @@ impl StageSet {
             Box::new(SphMetrics {
                 metrics: scene.output.metrics.clone(),
                 gravity: Vec3::from(scene.gravity),
-                file: Kind::Particles.file("metrics.csv", both),
+                file: Kind::Particles.file(METRICS_FILE, both),
                 recorder: None,
                 added: Vec::new(),
             }) as Box<dyn Stage>
@@ -193,7 +193,7 @@ impl StageSet {
                     initial_energy: 0.0,
                 });
             Box::new(GridMetrics {
-                file: Kind::Grid.file("metrics.csv", both),
+                file: Kind::Grid.file(METRICS_FILE, both),
                 csv: None,
                 taylor_green,
                 added: Vec::new(),

@@ -41,19 +41,7 @@ impl Plan {
                 }
             })
             .collect();
-        let mut outputs = p.frames.describe(&p.sim);
-        outputs.extend(p.profiles.iter().map(|(name, ..)| {
-            (
-                "profile",
-                format!("profile_{name}.csv: grid velocity along a line, at the end"),
-            )
-        }));
-        if p.sim.grid.as_ref().is_some_and(|g| g.average.is_some()) {
-            outputs.push((
-                "average",
-                "average.vti: the time-averaged grid velocity, at the end".into(),
-            ));
-        }
+        let outputs = p.outputs.describe(&p.sim);
         let clock = match p.kind {
             SceneKind::Coupled => "one dt for both solvers, the smaller of their stable \
                                         steps; the water and the air exchange momentum across \

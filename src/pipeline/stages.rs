@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::frames::Kind;
+use super::outputs::Kind;
 use super::simulation::{Simulation, StepError};
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};

@@ -6,6 +6,9 @@ use crate::abl::AblSettings;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
 use crate::grid::{GridError, GridParams, GridSolver, InflowModes};
+use crate::io::{AttrValue, VtkOptions};
+use crate::metrics::Probe;
+use crate::pipeline::outputs::{LineProbe, OutputSpec};
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
 use crate::{Real, Vec3};
@@ -122,4 +125,44 @@ pub fn abl_settings(scene: &Scene) -> Option<AblSettings> {
         seed: scene.seed,
         databases,
     })
+}
+
+/// What the run writes: the `[output]` section, the HDF5 files' root attributes (scene name,
+/// seed) and the line probes, whose profiles are written at the end of a grid run.
+pub fn output_spec(scene: &Scene) -> OutputSpec {
+    let out = &scene.output;
+    let profiles = scene
+        .probes
+        .iter()
+        .filter_map(|p| match p {
+            Probe::Line {
+                name,
+                from,
+                to,
+                points,
+            } => Some(LineProbe {
+                name: name.clone(),
+                from: *from,
+                to: *to,
+                points: *points,
+            }),
+            _ => None,
+        })
+        .collect();
+    OutputSpec {
+        interval: out.interval,
+        vtk: out.vtk,
+        vtk_options: VtkOptions {
+            precision: out.precision,
+            compression: out.compression,
+        },
+        hdf5: out.hdf5,
+        compression: out.compression,
+        attrs: vec![
+            ("scene", AttrValue::Str(scene.name.clone())),
+            ("seed", AttrValue::Int(scene.seed as i64)),
+        ],
+        profiles,
+        formats: out.formats.clone(),
+    }
 }

@@ -178,6 +178,10 @@ pub struct Output {
     /// Columns of `metrics.csv` beyond step, time and dt; every metric when left out, none with [].
     #[serde(default = "default_metrics")]
     pub metrics: Vec<Metric>,
+    /// Further output formats, by the names they were registered with from outside eddy
+    /// (`eddy::pipeline::outputs::register`); none by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub formats: Vec<String>,
 }
 
 pub(super) fn default_true() -> bool {
@@ -203,6 +207,7 @@ impl Default for Output {
             compression: default_compression(),
             precision: Default::default(),
             metrics: default_metrics(),
+            formats: Vec::new(),
         }
     }
 }

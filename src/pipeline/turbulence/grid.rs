@@ -23,7 +23,7 @@ use crate::abl::{AblSettings, Seeding};
 use crate::grid::advect::{advect_band_into, Band};
 use crate::grid::walls::{boundary_cells, mean_velocity, shell_cells, wall_distance};
 use crate::grid::{Advection, GridSolver};
-use crate::pipeline::frames::Kind;
+use crate::pipeline::outputs::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
 use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;

@@ -25,7 +25,7 @@ use ndarray::Array3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::frames::Kind;
+use super::outputs::Kind;
 use super::stages::{AddedColumns, StepRecord};
 use super::RunError;
 use crate::abl::seeding::{Seed, SeedingParams};

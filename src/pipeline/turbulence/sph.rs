@@ -33,7 +33,7 @@ use super::{
 use crate::abl::params::LAYER_SPACINGS;
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
-use crate::pipeline::frames::Kind;
+use crate::pipeline::outputs::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
 use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;

@@ -168,13 +168,57 @@ def check_xdmf(xmf):
     print(xmf.name, len(times), "times", grids, "grid blocks", sets, "particle set blocks")
 
 
+def full_tensor(six):
+    """A symmetric tensor's six components (xx, yy, zz, xy, yz, xz) as the nine VTK's XDMF
+    reader expands `Tensor6` to, row by row."""
+    xx, yy, zz, xy, yz, xz = (six[..., c] for c in range(6))
+    return np.stack([xx, xy, xz, xy, yy, yz, xz, yz, zz], axis=-1)
+
+
+def check_statistics(h5):
+    """A statistics file: its .vti and .xmf open in VTK's readers and hold the HDF5 values at
+    every cell (NaN where no sample found fluid), the stress tensor as ParaView reads it."""
+    with h5py.File(h5, "r") as f:
+        assert f.attrs["format"] == "eddy-statistics", h5
+        stored = {name: f[name][()] for name in f}
+        origin, h = f.attrs["origin"], f.attrs["spacing"]
+    assert sorted(stored) == ["k", "mean_enstrophy", "mean_velocity", "mean_vorticity", "reynolds_stress", "samples"], sorted(stored)
+    assert stored["reynolds_stress"].shape[-1] == 6, h5
+    k = 0.5 * (stored["reynolds_stress"][..., 0] + stored["reynolds_stress"][..., 1] + stored["reynolds_stress"][..., 2])
+    assert np.allclose(k, stored["k"], rtol=1e-12, equal_nan=True), f"{h5}: k is not half the stress trace"
+    vti = h5.with_suffix(".vti")
+    if vti.exists():
+        out = read(vtkXMLImageDataReader(), vti)
+        for name, values in arrays(out.GetCellData()).items():
+            s = np.transpose(stored[name], (2, 1, 0) + tuple(range(3, stored[name].ndim)))
+            s = s.reshape(values.shape)
+            assert np.allclose(values, s.astype(np.float32), rtol=1e-6, atol=1e-30, equal_nan=True), f"{vti} {name}"
+    reader = vtkXdmfReader()
+    block = read(reader, h5.with_suffix(".xmf"))
+    if not block.IsA("vtkStructuredGrid"):
+        block = next(b for _, b in blocks(block))
+    centres = vtkCellCenters()
+    centres.SetInputData(block)
+    centres.Update()
+    c = vtk_to_numpy(centres.GetOutput().GetPoints().GetData())
+    ijk = np.rint((c - origin) / h - 0.5).astype(int)
+    for name, values in arrays(block.GetCellData()).items():
+        s = stored[name][ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        if name == "reynolds_stress":
+            s = full_tensor(s)
+        assert np.allclose(values, s, rtol=0, atol=0, equal_nan=True), f"{h5.with_suffix('.xmf')} {name}"
+    print(h5.name, "statistics", block.GetNumberOfCells(), "cells")
+
+
 def main():
     run = pathlib.Path(sys.argv[1])
     check_vtk_files(run)
-    xmfs = sorted(run.glob("*.xmf"))
+    xmfs = sorted(x for x in run.glob("*.xmf") if not x.stem.endswith("statistics"))
     assert xmfs or not list(run.glob("*frames.h5")), f"{run}: HDF5 frames without XDMF"
     for xmf in xmfs:
         check_xdmf(xmf)
+    for h5 in sorted(run.glob("*statistics.h5")):
+        check_statistics(h5)
 
 
 if __name__ == "__main__":

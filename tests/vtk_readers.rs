@@ -1,7 +1,8 @@
 //! Every VTK frame and XDMF series a particle run, a grid run with boundary-layer vortices and
 //! a coupled run write opens in VTK's own readers (`vtkXMLPolyDataReader`,
 //! `vtkXMLImageDataReader`, `vtkXdmfReader`: what ParaView uses), and what they read equals
-//! the HDF5 frames read by h5py, each grid value at its cell's centre (`tests/vtk_readers.py`).
+//! the HDF5 frames read by h5py, each grid value at its cell's centre (`tests/vtk_readers.py`);
+//! so do the running statistics' `.vti` and `.xmf`, the stress tensor as ParaView reads it.
 
 mod common;
 
@@ -62,7 +63,12 @@ fn vtk_reads_a_grid_run_with_vortex_particles() {
         common::sphere_database(&path, 0.5, 200, 1.0);
     }
     let database = format!("obstacles.0.abl.database={:?}", path.display().to_string());
-    let log = check("abl_sphere_wake.toml", 12, "0.02", &[database]);
+    let stats = "statistics.from=0.1".to_owned();
+    let log = check("abl_sphere_wake.toml", 12, "0.02", &[database, stats]);
+    assert!(
+        log.is_empty() || log.contains("statistics.h5 statistics"),
+        "{log}"
+    );
     // Vortex particles were seeded, and their sets read as blocks of the frames.
     let sets = log.lines().find(|l| l.starts_with("frames.xmf")).map(|l| {
         let words: Vec<&str> = l.split_whitespace().collect();
@@ -73,5 +79,14 @@ fn vtk_reads_a_grid_run_with_vortex_particles() {
 
 #[test]
 fn vtk_reads_a_coupled_run() {
-    check("coupled_wind_over_tank.toml", 3, "0.001", &[]);
+    let log = check(
+        "coupled_wind_over_tank.toml",
+        3,
+        "0.001",
+        &["statistics.from=0".into()],
+    );
+    for medium in ["grid", "particles"] {
+        let line = format!("{medium}_statistics.h5 statistics");
+        assert!(log.is_empty() || log.contains(&line), "{log}");
+    }
 }

@@ -15,7 +15,7 @@
 use std::path::PathBuf;
 
 use eddy::abl::AblDatabase;
-use eddy::pipeline::{Run, RunError, RunOptions};
+use eddy::pipeline::{Kind, Run, RunError, RunOptions};
 use eddy::{Real, Vec3};
 use eddy_precompute::run::{Engine, Finished, Job, Threads};
 use eddy_precompute::solve::Surface;
@@ -444,6 +444,71 @@ impl Simulation {
         d.set_item("energy", per(&|i| p.energy(i)).into_pyarray(py))?;
         d.set_item("age", PyArray1::from_slice(py, &p.age))?;
         Ok(d)
+    }
+
+    // ------------------------------------------------------------------ statistics
+
+    /// The running statistics of `medium` ("grid" or "particles"; default: the scene's one
+    /// medium), as written to `statistics.h5`: {"mean_velocity" (nx, ny, nz, 3),
+    /// "reynolds_stress" (nx, ny, nz, 6: xx, yy, zz, xy, yz, xz), "k", "mean_vorticity" (3),
+    /// "mean_enstrophy", "samples" (nx, ny, nz), "origin", "spacing", "dims" (the lattice:
+    /// cell (i, j, k) spans origin + spacing * [i, i + 1] x ...), "time_from", "time_to",
+    /// "sample_count"}; NaN where no sample found fluid. `None` before the first sample.
+    #[pyo3(signature = (medium = None))]
+    fn statistics<'py>(
+        &self,
+        py: Python<'py>,
+        medium: Option<&str>,
+    ) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let all = &self.run.pipeline.sim.statistics;
+        let name = |k: Kind| match k {
+            Kind::Grid => "grid",
+            Kind::Particles => "particles",
+        };
+        let chosen =
+            match (medium, all.len()) {
+                (_, 0) => return Err(PyValueError::new_err(
+                    "the scene has no [statistics] (add it, or pass {\"statistics.from\": 0.0} \
+                     as an override)",
+                )),
+                (Some(m), _) => all.iter().find(|s| name(s.kind) == m).ok_or_else(|| {
+                    let have: Vec<_> = all.iter().map(|s| name(s.kind)).collect();
+                    PyValueError::new_err(format!("medium {m:?}: one of {have:?}"))
+                })?,
+                (None, 1) => &all[0],
+                (None, _) => {
+                    return Err(PyValueError::new_err(
+                        "the scene has statistics in both media: pass medium=\"grid\" or \
+                     \"particles\"",
+                    ))
+                }
+            };
+        let stats = &chosen.stats;
+        let Some((from, to)) = stats.span else {
+            return Ok(None);
+        };
+        let f = stats.fields();
+        let stack = |c: &[Array3<Real>]| {
+            let views: Vec<_> = c.iter().map(|a| a.view()).collect();
+            numpy::ndarray::stack(Axis(3), &views)
+                .expect("equal shapes")
+                .into_pyarray(py)
+        };
+        let l = &stats.lattice;
+        let d = PyDict::new(py);
+        d.set_item("mean_velocity", stack(&f.mean_velocity))?;
+        d.set_item("reynolds_stress", stack(&f.reynolds_stress))?;
+        d.set_item("k", f.k.into_pyarray(py))?;
+        d.set_item("mean_vorticity", stack(&f.mean_vorticity))?;
+        d.set_item("mean_enstrophy", f.mean_enstrophy.into_pyarray(py))?;
+        d.set_item("samples", f.samples.into_pyarray(py))?;
+        d.set_item("origin", [l.origin.x, l.origin.y, l.origin.z])?;
+        d.set_item("spacing", l.spacing)?;
+        d.set_item("dims", l.dims)?;
+        d.set_item("time_from", from)?;
+        d.set_item("time_to", to)?;
+        d.set_item("sample_count", stats.steps)?;
+        Ok(Some(d))
     }
 
     fn __repr__(&self) -> String {

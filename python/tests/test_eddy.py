@@ -252,3 +252,27 @@ def test_ctrl_c_stops_a_precomputation_and_resume_keeps_what_was_done(tmp_path):
                                overrides={"grid.resolution": 20})
     assert 0 < computed < 32
     assert len(eddy.Database.open(out)) > 0
+
+
+def test_statistics_are_the_files_arrays_with_their_lattice(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    overrides = {"time.end": 0.3, "output.interval": 0.1, "grid.resolution": [32, 32, 1],
+                 "domain.max": [6.283185307179586, 6.283185307179586, 0.19634954084936207],
+                 "statistics.from": 0.1}
+    sim = eddy.Simulation(eddy.Scene.load(SCENES / "taylor_green.toml", overrides=overrides),
+                          out=tmp_path)
+    assert sim.statistics() is None
+    sim.run()
+    s = sim.statistics()
+    assert s["dims"] == [32, 32, 1] and s["spacing"] == pytest.approx(6.283185307179586 / 32)
+    assert s["time_from"] == pytest.approx(0.1) and s["time_to"] == pytest.approx(0.3)
+    with h5py.File(tmp_path / "statistics.h5", "r") as f:
+        assert f.attrs["sample_count"] == s["sample_count"] > 0
+        for name in ("mean_velocity", "reynolds_stress", "k", "mean_vorticity", "mean_enstrophy",
+                     "samples"):
+            assert np.array_equal(f[name][()], s[name], equal_nan=True), name
+    # The decaying vortex: its mean velocity lies between its start and its end.
+    assert s["reynolds_stress"].shape == (32, 32, 1, 6)
+    assert np.all(s["k"] >= 0)
+    with pytest.raises(ValueError, match="medium"):
+        sim.statistics("particles")

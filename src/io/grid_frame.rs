@@ -19,6 +19,10 @@ pub enum GridFieldData<'a> {
     Scalar(ArrayView3<'a, Real>),
     /// One 3-vector per cell, as its x, y and z components.
     Vector([ArrayView3<'a, Real>; 3]),
+    /// One symmetric 3 x 3 tensor per cell, as its six components xx, yy, zz, xy, yz, xz:
+    /// VTK's order for six-component arrays, which ParaView's tensor filters read as symmetric
+    /// tensors (XDMF's `Tensor6`).
+    Tensor([ArrayView3<'a, Real>; 6]),
 }
 
 impl<'a> GridFieldData<'a> {
@@ -27,6 +31,21 @@ impl<'a> GridFieldData<'a> {
         match self {
             GridFieldData::Scalar(v) => std::slice::from_ref(v),
             GridFieldData::Vector(v) => v,
+            GridFieldData::Tensor(v) => v,
+        }
+    }
+
+    /// Values per cell: 1, 3 or 6.
+    pub fn count(&self) -> usize {
+        self.components().len()
+    }
+
+    /// The name of component `c` in messages (`x`, `xy`, ...); empty for a scalar.
+    fn component_name(&self, c: usize) -> &'static str {
+        match self {
+            GridFieldData::Scalar(_) => "",
+            GridFieldData::Vector(_) => ["x", "y", "z"][c],
+            GridFieldData::Tensor(_) => ["xx", "yy", "zz", "xy", "yz", "xz"][c],
         }
     }
 
@@ -47,6 +66,17 @@ impl<'a> GridFieldData<'a> {
                 }
                 out
             }
+            GridFieldData::Tensor(components) => {
+                let views = components.map(order);
+                let mut out = Vec::with_capacity(6 * views[0].len());
+                let mut iters = views.each_ref().map(|v| v.iter());
+                for _ in 0..views[0].len() {
+                    for it in &mut iters {
+                        out.extend(it.next());
+                    }
+                }
+                out
+            }
         }
     }
 }
@@ -64,6 +94,14 @@ impl<'a> GridField<'a> {
         GridField {
             name,
             data: GridFieldData::Scalar(values),
+        }
+    }
+
+    /// A symmetric tensor field from its components xx, yy, zz, xy, yz, xz.
+    pub fn tensor(name: &'a str, components: [ArrayView3<'a, Real>; 6]) -> Self {
+        GridField {
+            name,
+            data: GridFieldData::Tensor(components),
         }
     }
 
@@ -139,12 +177,11 @@ impl GridFrame<'_> {
             if !seen.insert(name) {
                 return fail(format!("grid field name {name:?} appears twice"));
             }
-            let axes = ["x", "y", "z"];
             for (c, view) in field.data.components().iter().enumerate() {
                 if view.shape() != self.dims {
-                    let which = match field.data {
-                        GridFieldData::Scalar(_) => String::new(),
-                        GridFieldData::Vector(_) => format!(" ({} component)", axes[c]),
+                    let which = match field.data.component_name(c) {
+                        "" => String::new(),
+                        name => format!(" ({name} component)"),
                     };
                     return fail(format!(
                         "grid field {name:?}{which} has shape {:?}, the grid has dims {:?}",

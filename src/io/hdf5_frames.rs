@@ -307,7 +307,10 @@ pub(super) fn ctx<T>(r: hdf5::Result<T>, action: impl FnOnce() -> String) -> Res
     r.map_err(|e| (action(), e.to_string()))
 }
 
-fn write_root_attributes(root: &Group, attributes: &[(String, AttrValue)]) -> Result<(), Failure> {
+pub(super) fn write_root_attributes(
+    root: &Group,
+    attributes: &[(String, AttrValue)],
+) -> Result<(), Failure> {
     for (name, value) in attributes {
         let what = || format!("writing root attribute {name:?}");
         match value {

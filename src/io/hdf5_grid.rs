@@ -22,11 +22,11 @@ use std::path::Path;
 use hdf5::Group;
 
 use super::hdf5_frames::{
-    ctx, replace_file, set_grids, validate_sets, write_dataset, write_scalar_attr, write_sets,
-    Failure, FrameIndex,
+    ctx, replace_file, set_grids, validate_sets, write_dataset, write_root_attributes,
+    write_scalar_attr, write_sets, Failure, FrameIndex,
 };
 use super::hdf5_read::{FrameChoice, FrameSeries, StoredFrame};
-use super::{xdmf, AttrValue, GridFieldData, GridFrame, IoError, ParticleFrame};
+use super::{xdmf, AttrValue, GridFrame, IoError, ParticleFrame};
 use crate::{Real, Vec3};
 
 /// Value of the root attribute `format`, so readers can tell grid files from particle files.
@@ -180,6 +180,55 @@ fn write_geometry(root: &Group, g: &Geometry) -> Result<(), Failure> {
     write_array_attr(root, "dims", &g.dims.map(|n| n as u64))
 }
 
+/// Writes `frame` alone as the HDF5 file `path`: its fields as datasets at the root (laid out
+/// as a frame's), and as root attributes `attributes`, the grid's `origin`, `spacing` and
+/// `dims`, and the frame's `time` and `step`; then `STEM.xmf` beside it, one XDMF grid on the
+/// nodes of `STEM_points.h5`, so ParaView opens it as it opens the frames. Each file is written
+/// under a temporary name and renamed: a kill leaves the previous file whole. For results that
+/// are replaced as a run goes on (its statistics), not for a series.
+pub fn write_grid_file(
+    path: &Path,
+    frame: &GridFrame,
+    attributes: &[(&str, AttrValue)],
+    level: u8,
+) -> Result<(), IoError> {
+    frame.validate(path)?;
+    let reserved = ["origin", "spacing", "dims", "time", "step"];
+    if let Some((name, _)) = attributes.iter().find(|(n, _)| reserved.contains(n)) {
+        return Err(IoError::invalid(
+            path,
+            format!("root attribute name {name:?} is reserved for the grid writer"),
+        ));
+    }
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| IoError::invalid(path, "the file name is not UTF-8"))?;
+    let name = path
+        .file_name()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| IoError::invalid(path, "the file name is not UTF-8"))?;
+    let points = format!("{stem}_points.h5");
+    let (coordinates, shape) = xdmf::grid_points(frame);
+    let level = level.min(9);
+    replace_file(&path.with_file_name(&points), |file| {
+        write_dataset(file, "points", &coordinates, &shape, level)
+    })?;
+    let attributes: Vec<(String, AttrValue)> = attributes
+        .iter()
+        .map(|(n, v)| (n.to_string(), v.clone()))
+        .collect();
+    replace_file(path, |file| {
+        write_root_attributes(file, &attributes)?;
+        write_geometry(file, &Geometry::of(frame))?;
+        write_scalar_attr(file, "time", &frame.time)?;
+        write_scalar_attr(file, "step", &frame.step)?;
+        write_fields(file, frame, level)
+    })?;
+    let grid = xdmf::cell_grid(stem, name, &points, frame);
+    xdmf::write_single(&path.with_extension("xmf"), &grid)
+}
+
 fn write_array_attr<T: hdf5::H5Type>(loc: &Group, name: &str, v: &[T]) -> Result<(), Failure> {
     let what = || format!("writing attribute {name:?}");
     let attr = ctx(loc.new_attr::<T>().shape(v.len()).create(name), what)?;
@@ -191,9 +240,9 @@ fn write_fields(group: &Group, frame: &GridFrame, level: u8) -> Result<(), Failu
     for field in &frame.fields {
         // The identity order is the view's own [i, j, k] C order, which is h5py's.
         let values = field.data.flatten(|v| v);
-        let shape: &[usize] = match field.data {
-            GridFieldData::Scalar(_) => &[nx, ny, nz],
-            GridFieldData::Vector(_) => &[nx, ny, nz, 3],
+        let shape: &[usize] = match field.data.count() {
+            1 => &[nx, ny, nz],
+            c => &[nx, ny, nz, c],
         };
         write_dataset(group, field.name, &values, shape, level)?;
     }

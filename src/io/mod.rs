@@ -31,7 +31,8 @@ pub use frame::{Field, FieldData, ParticleFrame};
 pub use grid_frame::{GridField, GridFieldData, GridFrame};
 pub use hdf5_frames::{write_links, AttrValue, Hdf5Frames};
 pub use hdf5_grid::{
-    read_velocity, Hdf5GridFrames, StoredVelocity, GRID_FORMAT, GRID_FORMAT_VERSION,
+    read_velocity, write_grid_file, Hdf5GridFrames, StoredVelocity, GRID_FORMAT,
+    GRID_FORMAT_VERSION,
 };
 pub use hdf5_read::FrameChoice;
 pub use pvd::PvdSeries;

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::vtk_xml::{active_arrays, time_field, VtkOptions, XmlVtk};
-use super::{write_atomic, GridFieldData, GridFrame, IoError};
+use super::{write_atomic, GridFrame, IoError};
 
 /// One VTK file per frame (XML ImageData, so `path` must end in `.vti`) with each field as cell
 /// data (scalars, 3-component vectors) stored as `options` say, written atomically. The time
@@ -30,19 +30,12 @@ pub fn write_grid_vtk(path: &Path, frame: &GridFrame, options: VtkOptions) -> Re
     let mut arrays = String::new();
     for field in &frame.fields {
         let values = field.data.flatten(|v| v.reversed_axes());
-        let components = match field.data {
-            GridFieldData::Scalar(_) => 1,
-            GridFieldData::Vector(_) => 3,
-        };
-        arrays += &vtk.reals(field.name, components, &values);
+        arrays += &vtk.reals(field.name, field.data.count(), &values);
         arrays.push('\n');
     }
     let first = |c: usize| {
         let f = frame.fields.iter();
-        f.map(|f| (f.name, f.data)).find(|(_, d)| match d {
-            GridFieldData::Scalar(_) => c == 1,
-            GridFieldData::Vector(_) => c == 3,
-        })
+        f.map(|f| (f.name, f.data)).find(|(_, d)| d.count() == c)
     };
     let active = active_arrays(first(1).map(|f| f.0), first(3).map(|f| f.0));
     let [nx, ny, nz] = frame.dims;

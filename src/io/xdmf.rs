@@ -16,7 +16,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::vtk_xml::xml_escape;
-use super::{write_atomic, FieldData, GridFieldData, GridFrame, IoError, ParticleFrame};
+use super::{write_atomic, FieldData, GridFrame, IoError, ParticleFrame};
 use crate::Real;
 
 /// The node coordinates of a grid, x slowest, as the `3DSMesh` geometry reads them, and their
@@ -50,9 +50,35 @@ fn item(shape: &[usize], file: &str, path: &str) -> String {
     )
 }
 
-/// An `Attribute` element: a scalar or a 3-vector per node or cell.
-fn attribute(name: &str, center: &str, vector: bool, data_item: &str) -> String {
-    let kind = if vector { "Vector" } else { "Scalar" };
+/// A symmetric tensor stored in VTK's component order (xx, yy, zz, xy, yz, xz) as the
+/// `DataItem` XDMF's `Tensor6` reads, whose order is xx, xy, xz, yy, yz, zz: the six
+/// components as hyperslabs of the stored array, joined in XDMF's order.
+fn tensor6_item([nx, ny, nz]: [usize; 3], file: &str, path: &str) -> String {
+    let stored = item(&[nx, ny, nz, 6], file, path);
+    let slabs: String = [0, 3, 5, 1, 4, 2]
+        .iter()
+        .map(|c| {
+            format!(
+                "<DataItem ItemType=\"HyperSlab\" Dimensions=\"{nx} {ny} {nz} 1\" \
+                 Type=\"HyperSlab\"><DataItem Dimensions=\"3 4\" Format=\"XML\">0 0 0 {c} \
+                 1 1 1 1 {nx} {ny} {nz} 1</DataItem>{stored}</DataItem>"
+            )
+        })
+        .collect();
+    format!(
+        "<DataItem ItemType=\"Function\" Function=\"JOIN($0, $1, $2, $3, $4, $5)\" \
+         Dimensions=\"{nx} {ny} {nz} 6\">{slabs}</DataItem>"
+    )
+}
+
+/// An `Attribute` element: a scalar, a 3-vector or a symmetric tensor (6 values) per node or
+/// cell.
+fn attribute(name: &str, center: &str, components: usize, data_item: &str) -> String {
+    let kind = match components {
+        3 => "Vector",
+        6 => "Tensor6",
+        _ => "Scalar",
+    };
     format!(
         "<Attribute Name=\"{}\" AttributeType=\"{kind}\" Center=\"{center}\">{data_item}</Attribute>\n",
         xml_escape(name)
@@ -82,7 +108,7 @@ pub(super) fn particle_grid(
         let vector = matches!(field.data, FieldData::Vector(_));
         let shape: &[usize] = if vector { &[n, 3] } else { &[n] };
         let data = item(shape, file, &format!("{group}{}", field.name));
-        s += &attribute(field.name, "Node", vector, &data);
+        s += &attribute(field.name, "Node", if vector { 3 } else { 1 }, &data);
     }
     s.push_str("</Grid>\n");
     Some(s)
@@ -103,14 +129,19 @@ pub(super) fn cell_grid(name: &str, file: &str, points_file: &str, frame: &GridF
         item(&[(nx + 1) * (ny + 1) * (nz + 1), 3], points_file, "/points")
     );
     for field in &frame.fields {
-        let vector = matches!(field.data, GridFieldData::Vector(_));
-        let shape: &[usize] = if vector {
-            &[nx, ny, nz, 3]
+        let c = field.data.count();
+        let shape: &[usize] = if c > 1 {
+            &[nx, ny, nz, c]
         } else {
             &[nx, ny, nz]
         };
-        let data = item(shape, file, &format!("/{}", field.name));
-        s += &attribute(field.name, "Cell", vector, &data);
+        let path = format!("/{}", field.name);
+        let data = if c == 6 {
+            tensor6_item(frame.dims, file, &path)
+        } else {
+            item(shape, file, &path)
+        };
+        s += &attribute(field.name, "Cell", c, &data);
     }
     s.push_str("</Grid>\n");
     s
@@ -130,6 +161,15 @@ pub(super) fn frame(index: usize, time: Real, grids: &[String]) -> String {
     }
     s.push_str("</Grid>\n");
     s
+}
+
+/// Writes `path` whole (atomically) as one grid (no time series).
+pub(super) fn write_single(path: &Path, grid: &str) -> Result<(), IoError> {
+    write_atomic(path, |out| {
+        out.write_all(b"<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n<Domain>\n")?;
+        out.write_all(grid.as_bytes())?;
+        out.write_all(b"</Domain>\n</Xdmf>\n")
+    })
 }
 
 /// Writes `path` whole (atomically) as the temporal collection `name` of `frames`.

@@ -5,7 +5,8 @@
 use std::fmt;
 
 use crate::geometry::RigidBody;
-use crate::scene::Scene;
+use crate::metrics::statistics;
+use crate::scene::{build, Scene};
 use crate::Real;
 
 /// Bytes per fluid particle: state, neighbour lists and the pair cache of ~50 neighbours
@@ -56,9 +57,20 @@ impl Footprint {
             .grid
             .as_ref()
             .map_or(0.0, |g| g.resolution.iter().map(|&n| n as f64).product());
+        // The running statistics: the grid's cells, and a particle fluid's bins.
+        let statistics = build::statistics_spec(scene).map_or(0.0, |spec| {
+            let (lo, hi) = spec.domain;
+            let bins = scene.fluid.as_ref().map_or(0.0, |_| {
+                (0..3)
+                    .map(|a| ((hi[a] - lo[a]) / spec.bin).ceil().max(1.0))
+                    .product::<Real>()
+            });
+            cells * statistics::BYTES_PER_CELL as f64 + bins * statistics::BYTES_PER_BIN as f64
+        });
         let bytes = particles * BYTES_PER_PARTICLE as f64
             + samples * BYTES_PER_SAMPLE as f64
-            + cells * BYTES_PER_CELL as f64;
+            + cells * BYTES_PER_CELL as f64
+            + statistics;
         Self {
             particles,
             samples,

@@ -16,6 +16,7 @@ pub mod outputs;
 mod plan;
 mod simulation;
 mod stages;
+mod statistics;
 mod turbulence;
 
 use std::path::{Path, PathBuf};
@@ -29,6 +30,7 @@ pub use outputs::{Kind, Output, OutputSpec, Outputs};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
 pub use stages::{Stage, StepRecord};
+pub use statistics::{MediumStatistics, StatisticsSpec};
 pub use turbulence::{
     fit_to_liquid, GridTurbulence, SphTurbulence, Surface, Turbulence, TurbulenceStats, ABL_FIELD,
     SHELL_INNER, SHELL_OUTER,

@@ -11,6 +11,7 @@ use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
     TaylorGreenDecay,
 };
+use super::statistics::StatisticsStage;
 use super::turbulence::{GridTurbulence, SphTurbulence};
 use super::RunError;
 use crate::metrics::Probe;
@@ -40,6 +41,8 @@ struct StageSet {
     grid_turbulence: Built,
     /// The same lines on the particles.
     sph_turbulence: Built,
+    /// The running statistics of every medium, after the solvers' step.
+    statistics: Built,
     sph_metrics: Built,
     grid_metrics: Built,
 }
@@ -72,6 +75,7 @@ fn grid(s: StageSet) -> Vec<Built> {
         s.grid_probes,
         s.grid_turbulence,
         Some(Box::new(GridStep)),
+        s.statistics,
         s.grid_metrics,
     ]
 }
@@ -84,6 +88,7 @@ fn sph(s: StageSet) -> Vec<Built> {
         s.sph_turbulence,
         Some(Box::new(SphStep)),
         Some(Box::new(SphNeighbours)),
+        s.statistics,
         s.sph_metrics,
     ]
 }
@@ -99,6 +104,7 @@ fn side_by_side(s: StageSet) -> Vec<Built> {
         Some(Box::new(SphNeighbours)),
         s.grid_turbulence,
         Some(Box::new(GridStep)),
+        s.statistics,
         s.sph_metrics,
         s.grid_metrics,
     ]
@@ -118,6 +124,7 @@ fn coupled(s: StageSet, coupling: Coupling) -> Vec<Built> {
         s.sph_turbulence,
         Some(Box::new(SphStep)),
         Some(Box::new(SphNeighbours)),
+        s.statistics,
         s.sph_metrics,
         s.grid_metrics,
     ]
@@ -199,7 +206,10 @@ impl StageSet {
                 added: Vec::new(),
             }) as Box<dyn Stage>
         });
+        let statistics: Built = build::statistics_spec(scene)
+            .map(|spec| Box::new(StatisticsStage::build(spec, sim)) as Box<dyn Stage>);
         Ok(Self {
+            statistics,
             sph_probes,
             grid_probes,
             grid_turbulence,

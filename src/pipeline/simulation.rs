@@ -1,6 +1,7 @@
 //! What a scene simulates: its solvers, stepped on one clock.
 
 use super::coupling::Exchange;
+use super::statistics::MediumStatistics;
 use super::turbulence::Turbulence;
 use crate::grid::{GridError, GridSolver};
 use crate::io::IoError;
@@ -35,6 +36,8 @@ pub struct Simulation {
     pub sph_turbulence: Option<Turbulence>,
     /// What the water received across its surface in the last step, in a coupled scene.
     pub exchange: Option<Exchange>,
+    /// The running statistics of each medium, when the scene has `[statistics]`.
+    pub statistics: Vec<MediumStatistics>,
     pub(super) time: Real,
     pub(super) steps: u64,
 }
@@ -48,6 +51,7 @@ impl Simulation {
             grid_turbulence: None,
             sph_turbulence: None,
             exchange: None,
+            statistics: Vec::new(),
             time: 0.0,
             steps: 0,
         }

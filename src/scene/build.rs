@@ -9,6 +9,7 @@ use crate::grid::{GridError, GridParams, GridSolver, InflowModes};
 use crate::io::{AttrValue, VtkOptions};
 use crate::metrics::Probe;
 use crate::pipeline::outputs::{LineProbe, OutputSpec};
+use crate::pipeline::StatisticsSpec;
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
 use crate::{Real, Vec3};
@@ -165,4 +166,17 @@ pub fn output_spec(scene: &Scene) -> OutputSpec {
         profiles,
         formats: out.formats.clone(),
     }
+}
+
+/// The `[statistics]` section, its particle bins resolved (two particle spacings when left
+/// out) over the scene's domain.
+pub fn statistics_spec(scene: &Scene) -> Option<StatisticsSpec> {
+    let stats = scene.statistics.as_ref()?;
+    let spacing = scene.fluid.as_ref().map_or(1.0, |f| f.spacing);
+    Some(StatisticsSpec {
+        from: stats.from,
+        every: stats.every,
+        bin: stats.bin.unwrap_or(2.0 * spacing),
+        domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
+    })
 }

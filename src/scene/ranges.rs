@@ -273,6 +273,16 @@ pub static RANGES: &[KeyRange] = &[
     rule("probes[].from", INSIDE),
     rule("probes[].to", INSIDE),
     range("probes[].points", Interval::closed(2.0, 100_000.0).whole()),
+    range("statistics.from", NON_NEGATIVE),
+    range(
+        "statistics.every",
+        Interval::closed(1.0, 1_000_000.0).whole(),
+    ),
+    both(
+        "statistics.bin",
+        POSITIVE,
+        "cuts the domain into at most 10^8 bins",
+    ),
     range("output.interval", POSITIVE),
     rule("output.metrics", "each at most once"),
     range(

@@ -70,6 +70,10 @@ pub struct Scene {
     /// Probes, each written as columns of `probes.csv`.
     #[serde(default)]
     pub probes: Vec<Probe>,
+    /// Running statistics of the flow (mean velocity, Reynolds stresses, k, mean vorticity
+    /// and enstrophy), written as `statistics.h5` at every frame time; none when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub statistics: Option<Statistics>,
     /// What is written, and where.
     #[serde(default)]
     pub output: Output,
@@ -146,6 +150,28 @@ pub struct Fluid {
 
 fn default_density() -> Real {
     1000.0
+}
+
+/// Running statistics: per grid cell, or per bin of a lattice over an SPH fluid's domain, the
+/// time averages of the velocity, its fluctuations' products (the Reynolds stresses), k, the
+/// vorticity and the enstrophy.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Statistics {
+    /// Simulated time the averaging starts, s (the flow's start-up left out).
+    #[serde(default)]
+    pub from: Real,
+    /// Sample every this many steps (each sample stands for the time since the last).
+    #[serde(default = "default_every")]
+    pub every: u64,
+    /// Edge of the bins of an SPH fluid's lattice, m; two particle spacings when left out.
+    /// (On a grid the statistics live on its cells.)
+    #[serde(default)]
+    pub bin: Option<Real>,
+}
+
+fn default_every() -> u64 {
+    1
 }
 
 /// Outputs.

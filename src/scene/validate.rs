@@ -108,6 +108,7 @@ impl Scene {
             .validate()
             .map_err(|e| c.invalid(e.key, Number(e.value), e.allowed))?;
         self.validate_probes(&c)?;
+        self.validate_statistics(&c)?;
         c.ranged("output.interval", self.output.interval)?;
         c.ranged("output.compression", Real::from(self.output.compression))?;
         let mut metrics = HashSet::new();
@@ -117,6 +118,35 @@ impl Scene {
                     format!("output.metrics[{i}]"),
                     format!("{:?}", metric.column()),
                     "each metric at most once",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[statistics]`: its numbers in range, and a particle lattice of at most 10^8 bins.
+    fn validate_statistics(&self, c: &Checker) -> Result<(), SceneError> {
+        let Some(stats) = &self.statistics else {
+            return Ok(());
+        };
+        c.ranged("statistics.from", stats.from)?;
+        c.ranged("statistics.every", stats.every as Real)?;
+        if let Some(bin) = stats.bin {
+            c.ranged("statistics.bin", bin)?;
+            let bins: Real = (0..3)
+                .map(|a| {
+                    ((self.domain.max[a] - self.domain.min[a]) / bin)
+                        .ceil()
+                        .max(1.0)
+                })
+                .product();
+            if bins > 1e8 {
+                return Err(c.invalid(
+                    "statistics.bin",
+                    Number(bin),
+                    format!(
+                        "a bin that cuts the domain into at most 10^8 bins (this one: {bins:.3e})"
+                    ),
                 ));
             }
         }

@@ -1,5 +1,5 @@
 //! Everything a run writes besides its per-step rows, behind one [`Output`] trait: VTK frames,
-//! HDF5 frames with XDMF, the grid's time average, line profiles. Each format is a file here
+//! HDF5 frames with XDMF, the running statistics, the grid's time average, line profiles. Each format is a file here
 //! and one line of [`BUILT_IN`] (or a [`register`] call from outside the crate); it declares
 //! the files it writes ([`RunFile`]), so [`is_run_output`] knows every run's files, and it
 //! chooses from the run's [`OutputSpec`] whether it is built at all.
@@ -9,6 +9,7 @@ mod files;
 mod frame;
 mod hdf5;
 mod profiles;
+mod statistics;
 mod vtk;
 
 use std::path::Path;
@@ -20,6 +21,7 @@ pub use files::{
 };
 pub use frame::Frame;
 pub use profiles::LineProbe;
+pub use statistics::{STATISTICS_FORMAT, STATISTICS_FORMAT_VERSION};
 
 use super::{RunError, Simulation};
 use crate::io::{AttrValue, IoError, VtkOptions};
@@ -86,7 +88,7 @@ pub struct Format {
 }
 
 /// The built-in formats, in the order they write and the plan lists them.
-pub static BUILT_IN: [Format; 4] = [
+pub static BUILT_IN: [Format; 5] = [
     Format {
         name: "vtk",
         summary: "VTK frames with ParaView .pvd series (output.vtk)",
@@ -98,6 +100,12 @@ pub static BUILT_IN: [Format; 4] = [
         summary: "HDF5 frames with XDMF for h5py and ParaView (output.hdf5)",
         files: hdf5::FILES,
         build: hdf5::build,
+    },
+    Format {
+        name: "statistics",
+        summary: "the running statistics of [statistics], at every frame time",
+        files: statistics::FILES,
+        build: statistics::build,
     },
     Format {
         name: "profile",

@@ -1003,3 +1003,53 @@ fn point_probes_read_the_fluid_side_and_are_refused_inside_obstacles() {
         assert!(message.contains(needle), "{needle}: {message}");
     }
 }
+
+/// The grid's vorticity columns against the Taylor–Green vortex, u = sin x cos y,
+/// v = -cos x sin y, whose vorticity omega_z = 2 sin x sin y decays as exp(-2 nu t). On the
+/// grid the cell-centred vorticity is the central difference (sin h / h) of the faces' cell
+/// means (cos(h/2)), so at the cell centres it is f = cos(h/2) sin(h)/h times the exact one:
+/// `vorticity_max` is its peak at the cells nearest pi/2 (cos^2(h/2) below the exact peak),
+/// `vorticity_mean` the mean of |omega| over the centres, and `enstrophy` (sum |omega|^2 dV / 2)
+/// V/8 times the peak's square (the centres sum sin^2 x sin^2 y to a quarter exactly), each to
+/// 0.1 % (the decay's own error over 0.2 s).
+#[test]
+fn the_grid_s_vorticity_columns_follow_the_taylor_green_vortex() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let options = RunOptions {
+        out: Some(dir.path().to_path_buf()),
+        overrides: vec![
+            "time.end=0.2".into(),
+            "output.metrics=[\"vorticity_mean\", \"vorticity_max\", \"enstrophy\"]".into(),
+            "output.vtk=false".into(),
+        ],
+        ..RunOptions::default()
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/taylor_green.toml");
+    eddy::pipeline::run(&path, &options).expect("runs");
+    let text = std::fs::read_to_string(dir.path().join("metrics.csv")).expect("metrics.csv");
+    let mut lines = text.lines();
+    let header = lines.next().expect("a header");
+    assert_eq!(header, "step,time,dt,vorticity_mean,vorticity_max,enstrophy,taylor_green_error");
+    let volume = (2.0 * PI).powi(2) * 0.09817477042468103;
+    let h = 2.0 * PI / 64.0;
+    let f = (h / 2.0).cos() * h.sin() / h;
+    let mean_sin = (0..64)
+        .map(|i| ((i as Real + 0.5) * h).sin().abs())
+        .sum::<Real>()
+        / 64.0;
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<Real> = line.split(',').map(|c| c.parse().expect("a number")).collect();
+        let t = v[1] + v[2];
+        let peak = 2.0 * (-2.0 * 0.1 * t).exp() * f;
+        let close = |got: Real, want: Real| (got / want - 1.0).abs() < 1e-3;
+        let max = peak * (h / 2.0).cos().powi(2);
+        assert!(close(v[4], max), "t = {t}: max {} against {max}", v[4]);
+        let mean = peak * mean_sin * mean_sin;
+        assert!(close(v[3], mean), "t = {t}: mean {} against {mean}", v[3]);
+        let enstrophy = 0.125 * peak * peak * volume;
+        assert!(close(v[5], enstrophy), "t = {t}: enstrophy {} against {enstrophy}", v[5]);
+        rows += 1;
+    }
+    assert!(rows > 3, "{rows} rows");
+}

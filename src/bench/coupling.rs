@@ -58,7 +58,7 @@ pub fn run(path: &Path, options: &CouplingBenchOptions) -> Result<CouplingBench,
             scene.name
         )));
     }
-    scene.output.metrics.clear();
+    scene.output.metrics = Some(Vec::new());
     let mut coupled = Pipeline::build(&scene)?;
     let dt = coupled
         .sim

@@ -76,6 +76,14 @@ impl MetricsRecorder {
                 | Metric::RefinementSeconds
                 | Metric::OpenBoundarySeconds
                 | Metric::StepSeconds => 0.0,
+                // A grid's: validation keeps them out of an SPH fluid's list.
+                Metric::MaxDivergence
+                | Metric::PressureResidual
+                | Metric::ViscosityIterations
+                | Metric::Cfl
+                | Metric::ChangeRate
+                | Metric::AdvectSeconds
+                | Metric::ProjectSeconds => Real::NAN,
             })
             .collect();
         StateMetrics { values }

@@ -87,26 +87,29 @@ impl Probe {
     }
 }
 
-/// Per-step metrics a scene can ask for; each is a column of `metrics.csv`.
+/// Per-step metrics a scene can ask for; each is a column of `metrics.csv`. An SPH fluid
+/// offers [`Metric::SPH`], a MAC grid [`Metric::GRID`]; the names they share mean the same.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Metric {
+    /// Kinetic energy, J (on a grid: of the flow after the step, rho sum |u|^2 dV / 2).
     KineticEnergy,
     PotentialEnergy,
     DensityErrorAvg,
     DensityErrorMax,
     MaxSpeed,
+    /// Iterations of the pressure solve.
     PressureIterations,
     DivergenceIterations,
     /// Rotational energy of a micropolar refinement, J (zero for other methods).
     RotationalEnergy,
     /// Kinetic (linear plus rotational) plus potential energy, J.
     TotalEnergy,
-    /// Mean |curl v| over the fluid particles, 1/s.
+    /// Mean |curl v| over the fluid particles (or fluid cells), 1/s.
     VorticityMean,
     /// Largest |curl v|, 1/s.
     VorticityMax,
-    /// Enstrophy sum_i V |curl v_i|^2 / 2, m^3/s^2.
+    /// Enstrophy sum V |curl v|^2 / 2 over the particles (or fluid cells), m^3/s^2.
     Enstrophy,
     /// Wall-clock time of the refinement in the step, s.
     RefinementSeconds,
@@ -114,13 +117,27 @@ pub enum Metric {
     Particles,
     /// Wall-clock time of the open boundaries in the step (buffers, removal, spawning), s.
     OpenBoundarySeconds,
-    /// Wall-clock time of the whole SPH step (solves, hooks, forces, positions), s.
+    /// Wall-clock time of the whole step, s.
     StepSeconds,
+    /// Grid: largest |div u| after the projection, 1/s.
+    MaxDivergence,
+    /// Grid: relative residual the pressure solve ended at.
+    PressureResidual,
+    /// Grid: iterations of the implicit viscosity solve.
+    ViscosityIterations,
+    /// Grid: the step's CFL number, max |u| dt / dx.
+    Cfl,
+    /// Grid: |u^(n+1) - u^n| / (|u^n| dt), 1/s: how far from steady.
+    ChangeRate,
+    /// Grid: wall-clock time of the advection, s.
+    AdvectSeconds,
+    /// Grid: wall-clock time of the projection, s.
+    ProjectSeconds,
 }
 
 impl Metric {
-    /// Every metric, in column order.
-    pub const ALL: [Metric; 16] = [
+    /// What an SPH fluid offers, in column order.
+    pub const SPH: [Metric; 16] = [
         Metric::KineticEnergy,
         Metric::PotentialEnergy,
         Metric::DensityErrorAvg,
@@ -138,6 +155,24 @@ impl Metric {
         Metric::OpenBoundarySeconds,
         Metric::StepSeconds,
     ];
+
+    /// What a MAC grid offers, in column order.
+    pub const GRID: [Metric; 13] = [
+        Metric::KineticEnergy,
+        Metric::MaxDivergence,
+        Metric::PressureIterations,
+        Metric::PressureResidual,
+        Metric::ViscosityIterations,
+        Metric::Cfl,
+        Metric::ChangeRate,
+        Metric::AdvectSeconds,
+        Metric::ProjectSeconds,
+        Metric::StepSeconds,
+        Metric::VorticityMean,
+        Metric::VorticityMax,
+        Metric::Enstrophy,
+    ];
+
     /// Column name in `metrics.csv`.
     pub fn column(self) -> &'static str {
         match self {
@@ -157,6 +192,22 @@ impl Metric {
             Metric::Particles => "particles",
             Metric::OpenBoundarySeconds => "open_boundary_seconds",
             Metric::StepSeconds => "step_seconds",
+            Metric::MaxDivergence => "max_divergence",
+            Metric::PressureResidual => "pressure_residual",
+            Metric::ViscosityIterations => "viscosity_iterations",
+            Metric::Cfl => "cfl",
+            Metric::ChangeRate => "change_rate",
+            Metric::AdvectSeconds => "advect_seconds",
+            Metric::ProjectSeconds => "project_seconds",
+        }
+    }
+
+    /// Of `asked` (every one when `None`), those `offered` has, in `asked`'s order (`offered`'s
+    /// when every one).
+    pub fn chosen(asked: Option<&[Metric]>, offered: &[Metric]) -> Vec<Metric> {
+        match asked {
+            None => offered.to_vec(),
+            Some(asked) => asked.iter().filter(|m| offered.contains(m)).copied().collect(),
         }
     }
 }

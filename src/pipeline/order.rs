@@ -14,7 +14,7 @@ use super::stages::{
 use super::statistics::StatisticsStage;
 use super::turbulence::{GridTurbulence, SphTurbulence};
 use super::RunError;
-use crate::metrics::Probe;
+use crate::metrics::{Metric, Probe};
 use crate::scene::{build, Coupling, InitialFlow, Scene};
 use crate::Vec3;
 
@@ -181,16 +181,19 @@ impl StageSet {
                 recorder: None,
             }) as Box<dyn Stage>
         });
-        let sph_metrics: Built = (has_sph && !scene.output.metrics.is_empty()).then(|| {
+        let asked = scene.output.metrics.as_deref();
+        let sph_chosen = Metric::chosen(asked, &Metric::SPH);
+        let sph_metrics: Built = (has_sph && !sph_chosen.is_empty()).then(|| {
             Box::new(SphMetrics {
-                metrics: scene.output.metrics.clone(),
+                metrics: sph_chosen,
                 gravity: Vec3::from(scene.gravity),
                 file: Kind::Particles.file(METRICS_FILE, both),
                 recorder: None,
                 added: Vec::new(),
             }) as Box<dyn Stage>
         });
-        let grid_metrics: Built = has_grid.then(|| {
+        let grid_chosen = Metric::chosen(asked, &Metric::GRID);
+        let grid_metrics: Built = (has_grid && !grid_chosen.is_empty()).then(|| {
             let taylor_green = scene
                 .grid
                 .as_ref()
@@ -200,6 +203,7 @@ impl StageSet {
                     initial_energy: 0.0,
                 });
             Box::new(GridMetrics {
+                metrics: grid_chosen,
                 file: Kind::Grid.file(METRICS_FILE, both),
                 csv: None,
                 taylor_green,

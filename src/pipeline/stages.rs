@@ -8,7 +8,9 @@ use super::simulation::{Simulation, StepError};
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
-use crate::metrics::{GridProbeRecorder, Metric, MetricsRecorder, Probe, ProbeRecorder};
+use crate::metrics::{
+    grid_vorticity_stats, GridProbeRecorder, Metric, MetricsRecorder, Probe, ProbeRecorder,
+};
 use crate::sph::StepStats;
 use crate::{Real, Vec3};
 
@@ -307,24 +309,12 @@ impl Stage for SphMetrics {
     }
 }
 
-/// Columns of a grid's metrics after step, time and dt.
-const GRID_METRICS: [&str; 10] = [
-    "kinetic_energy",
-    "max_divergence",
-    "pressure_iterations",
-    "pressure_residual",
-    "viscosity_iterations",
-    "cfl",
-    "change_rate",
-    "advect_seconds",
-    "project_seconds",
-    "step_seconds",
-];
-
-/// The grid row of each step: what the step did and the kinetic energy it ended with, the
-/// columns other stages add (the turbulence's, the coupling's), and for a Taylor–Green scene
-/// the error of the energy decay.
+/// The grid row of each step: what the step did and the state it ended with (the metrics the
+/// scene asks for), the columns other stages add (the turbulence's, the coupling's), and for a
+/// Taylor–Green scene the error of the energy decay.
 pub struct GridMetrics {
+    /// Its columns after step, time and dt, in order.
+    pub metrics: Vec<Metric>,
     pub file: String,
     pub csv: Option<CsvSeries>,
     pub taylor_green: Option<TaylorGreenDecay>,
@@ -346,11 +336,12 @@ impl Stage for GridMetrics {
     }
 
     fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
+        let names: Vec<_> = self.metrics.iter().map(|m| m.column()).collect();
         (
             format!(
-                "{}: kinetic energy, max divergence, pressure and viscosity iterations, CFL, \
-                 change rate, stage times{}{}",
+                "{}: {}{}{}",
                 self.file,
+                names.join(", "),
                 notes(&self.added),
                 if self.taylor_green.is_some() {
                     "; Taylor-Green energy decay error |ln(E / E(0) exp(-4 nu t))|"
@@ -372,7 +363,7 @@ impl Stage for GridMetrics {
 
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
         let mut columns: Vec<String> = ["step", "time", "dt"].map(String::from).to_vec();
-        columns.extend(GRID_METRICS.map(String::from));
+        columns.extend(self.metrics.iter().map(|m| m.column().to_owned()));
         columns.extend(self.added.iter().flat_map(|a| a.names.clone()));
         if let (Some(tg), Some(grid)) = (self.taylor_green.as_mut(), sim.grid.as_ref()) {
             tg.initial_energy = grid.kinetic_energy();
@@ -386,25 +377,31 @@ impl Stage for GridMetrics {
         let (Some(csv), Some(s)) = (self.csv.as_mut(), rec.grid) else {
             return Ok(());
         };
-        let energy = sim.grid().kinetic_energy();
-        let mut row = vec![
-            rec.step as Real,
-            rec.time,
-            s.dt,
-            energy,
-            s.max_divergence,
-            s.pressure_iterations as Real,
-            s.pressure_residual,
-            s.viscosity_iterations as Real,
-            s.cfl,
-            s.change_rate,
-            s.advect_seconds,
-            s.project_seconds,
-            s.total_seconds,
-        ];
+        let grid = sim.grid();
+        let energy = grid.kinetic_energy();
+        let mut vorticity = None;
+        let mut vorticity = || *vorticity.get_or_insert_with(|| grid_vorticity_stats(grid));
+        let mut row = vec![rec.step as Real, rec.time, s.dt];
+        row.extend(self.metrics.iter().map(|m| match m {
+            Metric::KineticEnergy => energy,
+            Metric::MaxDivergence => s.max_divergence,
+            Metric::PressureIterations => s.pressure_iterations as Real,
+            Metric::PressureResidual => s.pressure_residual,
+            Metric::ViscosityIterations => s.viscosity_iterations as Real,
+            Metric::Cfl => s.cfl,
+            Metric::ChangeRate => s.change_rate,
+            Metric::AdvectSeconds => s.advect_seconds,
+            Metric::ProjectSeconds => s.project_seconds,
+            Metric::StepSeconds => s.total_seconds,
+            Metric::VorticityMean => vorticity().mean,
+            Metric::VorticityMax => vorticity().max,
+            Metric::Enstrophy => vorticity().enstrophy,
+            // An SPH fluid's: `Metric::GRID` leaves them out of a grid's list.
+            _ => Real::NAN,
+        }));
         row.extend(rec.added_to(Kind::Grid));
         if let Some(tg) = &self.taylor_green {
-            let exact = tg.initial_energy * (-4.0 * tg.nu * sim.grid().time()).exp();
+            let exact = tg.initial_energy * (-4.0 * tg.nu * grid.time()).exp();
             row.push((energy / exact).ln().abs());
         }
         csv.row(&row)?;

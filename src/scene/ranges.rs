@@ -284,7 +284,10 @@ pub static RANGES: &[KeyRange] = &[
         "cuts the domain into at most 10^8 bins",
     ),
     range("output.interval", POSITIVE),
-    rule("output.metrics", "each at most once"),
+    rule(
+        "output.metrics",
+        "each at most once, and offered by a solver of the scene",
+    ),
     range(
         "output.compression",
         Interval::closed(0.0, 9.0).noted("a deflate level, 0 for none"),

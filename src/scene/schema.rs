@@ -201,9 +201,17 @@ pub struct Output {
     /// at) or "f64" (the solver's values exactly). HDF5 frames are always f64.
     #[serde(default)]
     pub precision: crate::io::Precision,
-    /// Columns of `metrics.csv` beyond step, time and dt; every metric when left out, none with [].
-    #[serde(default = "default_metrics")]
-    pub metrics: Vec<Metric>,
+    /// Columns of `metrics.csv` beyond step, time and dt, by name: every metric the scene's
+    /// solvers offer when left out, none (and no `metrics.csv`) with []. Each solver writes
+    /// those it offers (a name offered by neither is refused): an SPH fluid kinetic_energy,
+    /// potential_energy, density_error_avg, density_error_max, max_speed,
+    /// pressure_iterations, divergence_iterations, rotational_energy, total_energy,
+    /// vorticity_mean, vorticity_max, enstrophy, refinement_seconds, particles,
+    /// open_boundary_seconds, step_seconds; a grid kinetic_energy, max_divergence,
+    /// pressure_iterations, pressure_residual, viscosity_iterations, cfl, change_rate,
+    /// advect_seconds, project_seconds, step_seconds, vorticity_mean, vorticity_max, enstrophy.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<Vec<Metric>>,
     /// Further output formats, by the names they were registered with from outside eddy
     /// (`eddy::pipeline::outputs::register`); none by default.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -219,9 +227,6 @@ fn default_compression() -> u8 {
 fn default_interval() -> Real {
     1.0 / 30.0
 }
-fn default_metrics() -> Vec<Metric> {
-    Metric::ALL.to_vec()
-}
 
 impl Default for Output {
     fn default() -> Self {
@@ -232,7 +237,7 @@ impl Default for Output {
             hdf5: false,
             compression: default_compression(),
             precision: Default::default(),
-            metrics: default_metrics(),
+            metrics: None,
             formats: Vec::new(),
         }
     }

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::load::base_dir;
 pub(super) use super::ranges::Interval;
 use super::ranges::{entry, pattern, KeyRange};
-use super::{Body, Domain, Motion, Number, Probe, Scene, SceneError, Shape};
+use super::{Body, Domain, Metric, Motion, Number, Probe, Scene, SceneError, Shape};
 use crate::Real;
 
 impl Scene {
@@ -111,14 +111,35 @@ impl Scene {
         self.validate_statistics(&c)?;
         c.ranged("output.interval", self.output.interval)?;
         c.ranged("output.compression", Real::from(self.output.compression))?;
+        self.validate_metrics(&c)
+    }
+
+    /// `output.metrics`: each name at most once, and offered by a solver of the scene.
+    fn validate_metrics(&self, c: &Checker) -> Result<(), SceneError> {
+        let offered: Vec<(&str, &[Metric])> = [
+            (self.fluid.is_some(), "an SPH fluid", &Metric::SPH[..]),
+            (self.grid.is_some(), "a grid", &Metric::GRID[..]),
+        ]
+        .into_iter()
+        .filter(|o| o.0)
+        .map(|o| (o.1, o.2))
+        .collect();
         let mut metrics = HashSet::new();
-        for (i, metric) in self.output.metrics.iter().enumerate() {
+        for (i, metric) in self.output.metrics.iter().flatten().enumerate() {
+            let key = format!("output.metrics[{i}]");
+            let value = format!("{:?}", metric.column());
             if !metrics.insert(metric) {
-                return Err(c.invalid(
-                    format!("output.metrics[{i}]"),
-                    format!("{:?}", metric.column()),
-                    "each metric at most once",
-                ));
+                return Err(c.invalid(key, value, "each metric at most once"));
+            }
+            if !offered.is_empty() && !offered.iter().any(|(_, o)| o.contains(metric)) {
+                let lists: Vec<String> = offered
+                    .iter()
+                    .map(|(who, o)| {
+                        let names: Vec<_> = o.iter().map(|m| m.column()).collect();
+                        format!("{who} offers {}", names.join(", "))
+                    })
+                    .collect();
+                return Err(c.invalid(key, value, lists.join("; ")));
             }
         }
         Ok(())

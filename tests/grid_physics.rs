@@ -1029,7 +1029,10 @@ fn the_grid_s_vorticity_columns_follow_the_taylor_green_vortex() {
     let text = std::fs::read_to_string(dir.path().join("metrics.csv")).expect("metrics.csv");
     let mut lines = text.lines();
     let header = lines.next().expect("a header");
-    assert_eq!(header, "step,time,dt,vorticity_mean,vorticity_max,enstrophy,taylor_green_error");
+    assert_eq!(
+        header,
+        "step,time,dt,vorticity_mean,vorticity_max,enstrophy,taylor_green_error"
+    );
     let volume = (2.0 * PI).powi(2) * 0.09817477042468103;
     let h = 2.0 * PI / 64.0;
     let f = (h / 2.0).cos() * h.sin() / h;
@@ -1039,7 +1042,10 @@ fn the_grid_s_vorticity_columns_follow_the_taylor_green_vortex() {
         / 64.0;
     let mut rows = 0;
     for line in lines {
-        let v: Vec<Real> = line.split(',').map(|c| c.parse().expect("a number")).collect();
+        let v: Vec<Real> = line
+            .split(',')
+            .map(|c| c.parse().expect("a number"))
+            .collect();
         let t = v[1] + v[2];
         let peak = 2.0 * (-2.0 * 0.1 * t).exp() * f;
         let close = |got: Real, want: Real| (got / want - 1.0).abs() < 1e-3;
@@ -1048,7 +1054,11 @@ fn the_grid_s_vorticity_columns_follow_the_taylor_green_vortex() {
         let mean = peak * mean_sin * mean_sin;
         assert!(close(v[3], mean), "t = {t}: mean {} against {mean}", v[3]);
         let enstrophy = 0.125 * peak * peak * volume;
-        assert!(close(v[5], enstrophy), "t = {t}: enstrophy {} against {enstrophy}", v[5]);
+        assert!(
+            close(v[5], enstrophy),
+            "t = {t}: enstrophy {} against {enstrophy}",
+            v[5]
+        );
         rows += 1;
     }
     assert!(rows > 3, "{rows} rows");

@@ -362,18 +362,39 @@ fn a_metric_the_scene_does_not_offer_is_refused_with_those_it_does() {
     let m = message(parse(&text));
     assert_contains(
         &m,
-        &["`output.metrics[1]`", "max_divergence", "an SPH fluid offers", "density_error_avg"],
+        &[
+            "`output.metrics[1]`",
+            "max_divergence",
+            "an SPH fluid offers",
+            "density_error_avg",
+        ],
     );
     assert!(!m.contains("a grid offers"), "{m}");
     let grid = "name = \"g\"\n[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[time]\nsteps = 1\n\
                 [grid]\nresolution = [8, 8, 8]\n";
-    let m = message(parse(&format!("{grid}[output]\nmetrics = [\"max_speed\"]\n")));
-    assert_contains(&m, &["`output.metrics[0]`", "max_speed", "a grid offers", "cfl", "enstrophy"]);
-    let scene = parse(&format!("{grid}[output]\nmetrics = [\"enstrophy\", \"cfl\"]\n"))
-        .expect("a grid's metrics");
+    let m = message(parse(&format!(
+        "{grid}[output]\nmetrics = [\"max_speed\"]\n"
+    )));
+    assert_contains(
+        &m,
+        &[
+            "`output.metrics[0]`",
+            "max_speed",
+            "a grid offers",
+            "cfl",
+            "enstrophy",
+        ],
+    );
+    let scene = parse(&format!(
+        "{grid}[output]\nmetrics = [\"enstrophy\", \"cfl\"]\n"
+    ))
+    .expect("a grid's metrics");
     assert_eq!(
         scene.output.metrics,
-        Some(vec![eddy::metrics::Metric::Enstrophy, eddy::metrics::Metric::Cfl])
+        Some(vec![
+            eddy::metrics::Metric::Enstrophy,
+            eddy::metrics::Metric::Cfl
+        ])
     );
 }
 

@@ -4,6 +4,7 @@ pub mod grid_probes;
 pub mod probes;
 pub mod series;
 mod spec;
+pub mod stations;
 pub mod statistics;
 
 use crate::parallel::sum_by;

@@ -207,7 +207,11 @@ impl Metric {
     pub fn chosen(asked: Option<&[Metric]>, offered: &[Metric]) -> Vec<Metric> {
         match asked {
             None => offered.to_vec(),
-            Some(asked) => asked.iter().filter(|m| offered.contains(m)).copied().collect(),
+            Some(asked) => asked
+                .iter()
+                .filter(|m| offered.contains(m))
+                .copied()
+                .collect(),
         }
     }
 }

@@ -20,6 +20,7 @@
 use ndarray::Array3;
 use rayon::prelude::*;
 
+use super::stations::{Station, StationSpec};
 use crate::grid::forces::CellVorticity;
 use crate::grid::GridSolver;
 use crate::{Real, Vec3};
@@ -150,6 +151,10 @@ pub struct FlowStatistics {
     pub span: Option<(Real, Real)>,
     /// Samples taken.
     pub steps: u64,
+    /// Profiles read from the cells, with their batches.
+    pub stations: Vec<Station>,
+    /// When the current batch of the stations ends and how long a batch is, s.
+    batch: Option<(Real, Real)>,
     /// Per-bin sums of the sample being taken (particles only) and the bins it touched.
     bins: Vec<BinSum>,
     touched: Vec<usize>,
@@ -168,15 +173,41 @@ impl FlowStatistics {
             cells: vec![CellMoments::default(); lattice.len()],
             span: None,
             steps: 0,
+            stations: Vec::new(),
+            batch: None,
             bins: Vec::new(),
             touched: Vec::new(),
         }
     }
 
-    /// Records that a sample stands for the interval `span`.
+    /// Adds stations on this lattice whose batches are `length` s long from `from` on (no
+    /// confidence intervals without a length); an error names a station finer than the
+    /// lattice.
+    pub fn add_stations(
+        &mut self,
+        specs: &[StationSpec],
+        from: Real,
+        length: Option<Real>,
+    ) -> Result<(), String> {
+        for spec in specs {
+            self.stations
+                .push(Station::new(spec.clone(), &self.lattice)?);
+        }
+        self.batch = length.filter(|l| *l > 0.0).map(|l| (from + l, l));
+        Ok(())
+    }
+
+    /// Records that a sample stands for the interval `span`, and ends the stations' batch when
+    /// its time has come.
     fn extend(&mut self, (from, to): (Real, Real)) {
         self.span = Some(self.span.map_or((from, to), |(a, _)| (a, to)));
         self.steps += 1;
+        while let Some((end, length)) = self.batch.filter(|(end, l)| to >= end - 1e-9 * l) {
+            for s in &mut self.stations {
+                s.next_batch(&self.cells);
+            }
+            self.batch = Some((end + length, length));
+        }
     }
 
     /// Adds the grid's current fluid cells as one sample of weight `weight` (the time it

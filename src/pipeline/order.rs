@@ -211,7 +211,10 @@ impl StageSet {
             }) as Box<dyn Stage>
         });
         let statistics: Built = build::statistics_spec(scene)
-            .map(|spec| Box::new(StatisticsStage::build(spec, sim)) as Box<dyn Stage>);
+            .map(|spec| {
+                Ok::<_, RunError>(Box::new(StatisticsStage::build(spec, sim)?) as Box<dyn Stage>)
+            })
+            .transpose()?;
         Ok(Self {
             statistics,
             sph_probes,

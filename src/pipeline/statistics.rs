@@ -7,6 +7,8 @@
 use super::outputs::Kind;
 use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
+use super::RunError;
+use crate::metrics::stations::StationSpec;
 use crate::metrics::statistics::{FlowStatistics, Lattice, BYTES_PER_BIN, BYTES_PER_CELL};
 use crate::{Real, Vec3};
 
@@ -21,6 +23,10 @@ pub struct StatisticsSpec {
     pub bin: Real,
     /// The box an SPH fluid's lattice covers: the scene's domain.
     pub domain: (Vec3, Vec3),
+    /// Profiles across boxes, with confidence intervals.
+    pub stations: Vec<StationSpec>,
+    /// The length of the stations' batches, s (none without an end time).
+    pub batch: Option<Real>,
 }
 
 /// The running statistics of one medium.
@@ -41,8 +47,10 @@ pub struct StatisticsStage {
 
 impl StatisticsStage {
     /// The stage, with an empty accumulator per medium of `sim` put into it: on the grid's
-    /// cells, on the bins of `spec.bin` over the domain for an SPH fluid.
-    pub fn build(spec: StatisticsSpec, sim: &mut Simulation) -> Self {
+    /// cells, on the bins of `spec.bin` over the domain for an SPH fluid; each with the
+    /// stations. A station finer than a lattice is refused.
+    pub fn build(spec: StatisticsSpec, sim: &mut Simulation) -> Result<Self, RunError> {
+        let mut lattices = Vec::new();
         if let Some(grid) = sim.grid.as_ref() {
             let mac = &grid.mac;
             let lattice = Lattice {
@@ -50,23 +58,24 @@ impl StatisticsStage {
                 spacing: mac.dx,
                 dims: mac.dims,
             };
-            sim.statistics.push(MediumStatistics {
-                kind: Kind::Grid,
-                stats: FlowStatistics::new(lattice),
-            });
+            lattices.push((Kind::Grid, lattice));
         }
         if sim.sph.is_some() {
             let (lo, hi) = spec.domain;
-            sim.statistics.push(MediumStatistics {
-                kind: Kind::Particles,
-                stats: FlowStatistics::new(Lattice::covering(lo, hi, spec.bin)),
-            });
+            lattices.push((Kind::Particles, Lattice::covering(lo, hi, spec.bin)));
         }
-        Self {
+        for (kind, lattice) in lattices {
+            let mut stats = FlowStatistics::new(lattice);
+            stats
+                .add_stations(&spec.stations, spec.from, spec.batch)
+                .map_err(RunError::Unsupported)?;
+            sim.statistics.push(MediumStatistics { kind, stats });
+        }
+        Ok(Self {
             spec,
             pending: (0, 0.0),
             sampled: false,
-        }
+        })
     }
 }
 

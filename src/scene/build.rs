@@ -7,6 +7,7 @@ use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
 use crate::grid::{GridError, GridParams, GridSolver, InflowModes};
 use crate::io::{AttrValue, VtkOptions};
+use crate::metrics::stations::StationSpec;
 use crate::metrics::Probe;
 use crate::pipeline::outputs::{LineProbe, OutputSpec};
 use crate::pipeline::StatisticsSpec;
@@ -178,5 +179,21 @@ pub fn statistics_spec(scene: &Scene) -> Option<StatisticsSpec> {
         every: stats.every,
         bin: stats.bin.unwrap_or(2.0 * spacing),
         domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
+        stations: stats
+            .stations
+            .iter()
+            .map(|s| StationSpec {
+                name: s.name.clone(),
+                min: Vec3::from(s.min),
+                max: Vec3::from(s.max),
+                axis: s.axis.index(),
+                bins: s.bins,
+            })
+            .collect(),
+        batch: scene
+            .time
+            .end
+            .map(|end| (end - stats.from) / stats.batches as Real)
+            .filter(|l| *l > 0.0),
     })
 }

@@ -283,6 +283,11 @@ pub static RANGES: &[KeyRange] = &[
         POSITIVE,
         "cuts the domain into at most 10^8 bins",
     ),
+    range("statistics.batches", Interval::closed(2.0, 1000.0).whole()),
+    rule("statistics.stations[].name", "A-Z, a-z, 0-9 and _, and no other station's"),
+    rule("statistics.stations[].min", INSIDE),
+    rule("statistics.stations[].max", "inside the domain, > `min` along each axis"),
+    range("statistics.stations[].bins", Interval::closed(1.0, 100_000.0).whole()),
     range("output.interval", POSITIVE),
     rule(
         "output.metrics",

@@ -168,6 +168,35 @@ pub struct Statistics {
     /// (On a grid the statistics live on its cells.)
     #[serde(default)]
     pub bin: Option<Real>,
+    /// Batches the averaging window (`from` to `time.end`) is cut into for the stations'
+    /// confidence intervals (batch means).
+    #[serde(default = "default_batches")]
+    pub batches: u64,
+    /// Stations: profiles of U and k across a box, written as `station_NAME.csv`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stations: Vec<Station>,
+}
+
+fn default_batches() -> u64 {
+    10
+}
+
+/// A station: the box from `min` to `max` cut into `bins` equal bins along `axis`; each bin's
+/// time-averaged U and k (averaged over the statistics' cells whose centres lie in it) with
+/// their 95 % confidence half-widths, at every frame time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Station {
+    /// Names the file `station_NAME.csv`.
+    pub name: String,
+    /// Lower corner, m.
+    pub min: [Real; 3],
+    /// Upper corner, m.
+    pub max: [Real; 3],
+    /// The axis the profile runs along.
+    pub axis: Axis,
+    /// Bins along `axis`.
+    pub bins: usize,
 }
 
 fn default_every() -> u64 {

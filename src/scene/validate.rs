@@ -152,6 +152,41 @@ impl Scene {
         };
         c.ranged("statistics.from", stats.from)?;
         c.ranged("statistics.every", stats.every as Real)?;
+        c.ranged("statistics.batches", stats.batches as Real)?;
+        let mut names: Vec<&str> = Vec::new();
+        for (i, station) in stats.stations.iter().enumerate() {
+            let key = format!("statistics.stations[{i}]");
+            let name = station.name.as_str();
+            let well_formed = !name.is_empty()
+                && name
+                    .chars()
+                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+            if !well_formed {
+                return Err(c.invalid(
+                    format!("{key}.name"),
+                    format!("{name:?}"),
+                    "a non-empty name of A-Z, a-z, 0-9 and _ (it names a file)",
+                ));
+            }
+            if let Some(first) = names.iter().position(|n| *n == name) {
+                return Err(c.invalid(
+                    format!("{key}.name"),
+                    format!("{name:?}"),
+                    format!("a name no other station has (`statistics.stations[{first}]` has it)"),
+                ));
+            }
+            names.push(name);
+            self.point_inside(c, &format!("{key}.min"), &station.min)?;
+            self.point_inside(c, &format!("{key}.max"), &station.max)?;
+            for a in 0..3 {
+                c.num(
+                    &format!("{key}.max[{a}]"),
+                    station.max[a],
+                    Interval::gt(station.min[a]).noted("> `min`"),
+                )?;
+            }
+            c.ranged(&format!("{key}.bins"), station.bins as Real)?;
+        }
         if let Some(bin) = stats.bin {
             c.ranged("statistics.bin", bin)?;
             let bins: Real = (0..3)

@@ -8,8 +8,10 @@
 //! symmetric tensors), `k`, `mean_vorticity` (3), `mean_enstrophy`, `samples` (the samples
 //! that found fluid there); root attributes `format` ("eddy-statistics"), `format_version`,
 //! the lattice's `origin`, `spacing`, `dims`, `time_from` and `time_to` (the time the samples
-//! span), `sample_count`, `medium`, the scene's name and seed.
+//! span), `sample_count`, `medium`, the scene's name and seed. Each station's profile is
+//! `station_NAME.csv` (`crate::metrics::stations`).
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use ndarray::{Array3, ArrayView3};
@@ -17,9 +19,11 @@ use ndarray::{Array3, ArrayView3};
 use super::frame::Frame;
 use super::{Kind, Output, OutputSpec, RunFile};
 use crate::io::{
-    write_grid_file, write_grid_vtk, AttrValue, GridField, GridFrame, IoError, VtkOptions,
+    write_atomic, write_grid_file, write_grid_vtk, AttrValue, GridField, GridFrame, IoError,
+    VtkOptions,
 };
-use crate::metrics::statistics::FlowStatistics;
+use crate::metrics::stations::Station;
+use crate::metrics::statistics::{CellMoments, FlowStatistics};
 use crate::pipeline::Simulation;
 use crate::Real;
 
@@ -29,6 +33,9 @@ pub(super) const FILES: &[RunFile] = &[
     RunFile::PerMedium("statistics.xmf"),
     RunFile::PerMedium("statistics_points.h5"),
     RunFile::PerMedium("statistics.vti"),
+    RunFile::Named("station_", ".csv"),
+    RunFile::Named("grid_station_", ".csv"),
+    RunFile::Named("particles_station_", ".csv"),
 ];
 
 /// Value of the root attribute `format`.
@@ -111,8 +118,31 @@ impl StatisticsOutput {
         if let Some(options) = self.vtk {
             write_grid_vtk(&self.file(kind, "statistics.vti"), &frame, options)?;
         }
+        for station in &stats.stations {
+            let path = self.file(kind, &format!("station_{}.csv", station.spec.name));
+            write_profile(&path, station, &stats.cells)?;
+        }
         Ok(())
     }
+}
+
+/// A station's profile as CSV, rewritten whole: per bin its centre along the axis, U, k, their
+/// 95 % half-widths (NaN before two batches are complete) and the complete batches.
+fn write_profile(path: &Path, station: &Station, cells: &[CellMoments]) -> Result<(), IoError> {
+    let mut text = String::from("position,u,v,w,k,u_ci,v_ci,w_ci,k_ci,batches\n");
+    for b in station.profile(cells) {
+        let [u, v, w] = b.mean;
+        let [cu, cv, cw] = b.mean_ci;
+        let _ = writeln!(
+            text,
+            "{},{u},{v},{w},{},{cu},{cv},{cw},{},{}",
+            b.position,
+            b.k,
+            b.k_ci,
+            station.batches()
+        );
+    }
+    write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
 
 impl Output for StatisticsOutput {
@@ -126,10 +156,16 @@ impl Output for StatisticsOutput {
             .map(|m| {
                 let h5 = m.kind.file("statistics.h5", self.both);
                 let vti = m.kind.file("statistics.vti", self.both);
-                let files = match self.vtk {
+                let mut files = match self.vtk {
                     Some(_) => format!("{h5} (+ .xmf), {vti}"),
                     None => format!("{h5} (+ .xmf)"),
                 };
+                for s in &m.stats.stations {
+                    let csv = m
+                        .kind
+                        .file(&format!("station_{}.csv", s.spec.name), self.both);
+                    files += &format!(", {csv}");
+                }
                 (
                     "statistics",
                     format!("{files}: the running statistics, rewritten at every frame time"),

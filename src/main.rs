@@ -86,6 +86,10 @@ enum Command {
     /// a plane across an axis (the grid's cells, or the particles of a thin slab as dots), with
     /// a colour bar, axes in metres and the time in the title.
     Slice(cli::slice::SliceArgs),
+    /// Spectra of a run: the power spectral density of a probe's (or any probes.csv or
+    /// metrics.csv column's) time series by Welch's method, with its peak frequency, or the
+    /// shell-averaged kinetic-energy spectrum E(k) of a grid frame; a CSV and a log-log PNG.
+    Spectrum(cli::spectrum::SpectrumArgs),
     /// The DFG cylinder benchmark (Schäfer & Turek 1996) from a run of scenes/dfg_2d1.toml
     /// (steady, Re 20) or scenes/dfg_2d2.toml (periodic, Re 100): drag and lift coefficients,
     /// the recirculation length or the Strouhal number, and the pressure difference across the
@@ -241,6 +245,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             eprintln!("eddy: wrote {}", out.display());
         }
         Command::Slice(args) => cli::slice::run(&args)?,
+        Command::Spectrum(args) => cli::spectrum::run(&args)?,
         Command::Lookup(args) => cli::abl::lookup(&args)?,
         Command::Info(args) => cli::abl::info(&args)?,
         Command::SceneKeys { markdown } => {

@@ -5,4 +5,5 @@ pub mod abl;
 pub mod analytic;
 pub mod bench;
 pub mod slice;
+pub mod spectrum;
 pub mod sweep;

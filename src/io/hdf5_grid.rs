@@ -302,6 +302,30 @@ pub fn read_velocity(path: &Path, frame: Option<usize>) -> Result<StoredVelocity
     })
 }
 
+/// The obstacle cells (`solid` > 0.5) of frame `frame` of the grid frames file `path`, or
+/// None when the frame has no `solid` field. HDF5 holds a global lock: call from one thread.
+pub fn read_solid(path: &Path, frame: usize) -> Result<Option<ndarray::Array3<bool>>, IoError> {
+    let series = FrameSeries::open(path)?;
+    let dims = grid_geometry(&series)?.dims;
+    let StoredFrame {
+        index: k, group, ..
+    } = series.pick(FrameChoice::Index(frame))?;
+    let Ok(dataset) = group.dataset("solid") else {
+        return Ok(None);
+    };
+    let fail = |what: String| IoError::invalid(path, format!("frame {k}: {what}"));
+    let data = dataset
+        .read::<f64, ndarray::Ix3>()
+        .map_err(|e| fail(format!("dataset `solid`: {e}")))?;
+    if data.shape() != dims {
+        return Err(fail(format!(
+            "solid has shape {:?}, the file's grid is {dims:?}",
+            data.shape()
+        )));
+    }
+    Ok(Some(data.mapv(|s| s > 0.5)))
+}
+
 /// The grid the frames of `series` share, refusing a series that is not grid frames.
 pub(crate) fn grid_geometry(series: &FrameSeries) -> Result<Geometry, IoError> {
     let fail = |what: String| IoError::invalid(&series.path, what);

@@ -18,6 +18,7 @@ pub mod plot;
 mod pvd;
 mod shard;
 pub mod slice;
+pub mod spectrum_plot;
 mod vti;
 mod vtk;
 mod vtk_xml;
@@ -31,7 +32,7 @@ pub use frame::{Field, FieldData, ParticleFrame};
 pub use grid_frame::{GridField, GridFieldData, GridFrame};
 pub use hdf5_frames::{write_links, AttrValue, Hdf5Frames};
 pub use hdf5_grid::{
-    read_velocity, write_grid_file, Hdf5GridFrames, StoredVelocity, GRID_FORMAT,
+    read_solid, read_velocity, write_grid_file, Hdf5GridFrames, StoredVelocity, GRID_FORMAT,
     GRID_FORMAT_VERSION,
 };
 pub use hdf5_read::FrameChoice;

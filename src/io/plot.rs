@@ -75,6 +75,11 @@ impl RunSeries {
         })
     }
 
+    /// The columns' names, in the file's order.
+    pub fn columns(&self) -> &[String] {
+        &self.header
+    }
+
     /// The column of that name, if the run wrote it.
     pub fn column(&self, name: &str) -> Option<Vec<Real>> {
         let k = self.header.iter().position(|h| h == name)?;
@@ -311,7 +316,7 @@ fn line<DB: DrawingBackend>(
 /// The legend box every panel of eddy's figures draws, in the corner of the plot whose
 /// 40 % x 40 % box holds the fewest of the panel's `data` points (upper right on a tie), so it
 /// sits off the data.
-fn legend<'a, DB, CT>(
+pub(crate) fn legend<'a, DB, CT>(
     chart: &mut ChartContext<'a, DB, CT>,
     data: impl IntoIterator<Item = CT::From>,
 ) -> Result<(), String>

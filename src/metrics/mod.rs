@@ -1,9 +1,11 @@
-//! Per-step diagnostics and probes. Each is computed only when a scene asks for it.
+//! Per-step diagnostics and probes. Each is computed only when a scene asks for it. Spectra
+//! of a run's probes and fields are computed after it (`eddy spectrum`).
 
 pub mod grid_probes;
 pub mod probes;
 pub mod series;
 mod spec;
+pub mod spectrum;
 pub mod stations;
 pub mod statistics;
 

@@ -43,6 +43,9 @@ pub struct BinProfile {
     pub k_ci: Real,
 }
 
+/// A bin's `U` and `k`.
+type BinValues = ([Real; 3], Real);
+
 /// A station on a lattice: its bins' cells and the values of the batches completed so far.
 #[derive(Debug, Clone)]
 pub struct Station {
@@ -52,7 +55,7 @@ pub struct Station {
     /// Its cells' moments when the current batch began, in the order of `cells`.
     start: Vec<CellMoments>,
     /// Per complete batch, per bin: `U` and `k` of the batch's samples.
-    batches: Vec<Vec<([Real; 3], Real)>>,
+    batches: Vec<Vec<BinValues>>,
 }
 
 impl Station {
@@ -114,7 +117,7 @@ impl Station {
     }
 
     /// Per bin, `U` and `k` of `moments` (its cells' moments, in the order of `cells`).
-    fn bins(&self, moments: &[CellMoments]) -> Vec<([Real; 3], Real)> {
+    fn bins(&self, moments: &[CellMoments]) -> Vec<BinValues> {
         let mut at = 0;
         self.cells
             .iter()
@@ -135,7 +138,7 @@ impl Station {
             .into_iter()
             .enumerate()
             .map(|(b, (mean, k))| {
-                let spread = |f: &dyn Fn(&([Real; 3], Real)) -> Real| {
+                let spread = |f: &dyn Fn(&BinValues) -> Real| {
                     half_width(
                         &self
                             .batches
@@ -157,7 +160,7 @@ impl Station {
 }
 
 /// `U` and `k` over cells, each weighted by its samples' weight; NaN without one.
-fn average(cells: &[CellMoments]) -> ([Real; 3], Real) {
+fn average(cells: &[CellMoments]) -> BinValues {
     let w: Real = cells.iter().map(|c| c.weight).sum();
     if w <= 0.0 {
         return ([Real::NAN; 3], Real::NAN);

@@ -630,7 +630,8 @@ fn the_protocol_runs_on_particles() {
         assert!(r.mean_k.is_finite() && r.mean_k >= 0.0, "{r:?}");
     }
     assert!(rows[2].mean_particles > 0.0, "{:?}", rows[2]);
-    // Two stations behind the ball (0.25 m + 2 and 4 times its 0.16 m), 16 bins across z each.
+    // Two and four ball lengths behind the ball (0.25 m + 2 and 4 times its 0.16 m): the
+    // second, 0.89 m, lies beyond the 0.85 m domain and is left out; 16 bins across z.
     let csv = std::fs::read_to_string(dir.path().join("profiles/abl.csv")).expect("profiles");
     let stations: Vec<Real> = csv
         .lines()
@@ -643,6 +644,9 @@ fn the_protocol_runs_on_particles() {
                 .expect("a number")
         })
         .collect();
-    assert_eq!(stations.len(), 2 * 16);
-    assert!((stations[0] - 0.57).abs() < 1e-9 && (stations[31] - 0.89).abs() < 1e-9);
+    assert_eq!(stations.len(), 16);
+    assert!(
+        stations.iter().all(|s| (s - 0.57).abs() < 1e-9),
+        "{stations:?}"
+    );
 }

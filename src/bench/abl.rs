@@ -6,25 +6,28 @@
 //! obstacles in a channel, measured as [`super::abl_particles`] says, the reference at
 //! `1/scale` the spacing.
 //!
-//! **Measure.** At stations behind the step, each run accumulates over time (from the scene's
-//! `grid.average_from`) and over the periodic span the mean and mean square of every velocity
-//! component per cell of its own grid; the time-averaged velocity `U` and turbulent kinetic
-//! energy `k = 1/2 sum (<u_i^2> - <u_i>^2)` of each cell are then averaged over the cells of
-//! every coarse bin (one coarse cell in x and y), so a fine run's small-scale fluctuation
-//! counts as fluctuation, not as mean shear. The errors are root-mean-square differences from
-//! the reference over the stations' bins: `U` in units of |U_0|, `k` in units of |U_0|^2.
+//! **Measure.** Each run keeps the running statistics of its flow (`[statistics]`, from the
+//! scene's `grid.average_from`, or half the run on particles) with one station per position
+//! behind the obstacles: a box one coarse cell thick along x, cut into coarse bins across the
+//! flow (y on the grid, z on particles) and taking the whole span (z) or depth (y). A bin's
+//! time-averaged velocity `U` and turbulent kinetic energy `k` are the averages of its lattice
+//! cells' (`crate::metrics::stations`): each cell's own temporal fluctuation, so a fine run's
+//! small-scale fluctuation counts as fluctuation, not the mean shear across a bin; on the grid
+//! the cells along the periodic span are pooled first, as one ensemble. On
+//! particles every run's lattice has the coarse spacing, so the reference is filtered as the
+//! coarse runs are. The errors are root-mean-square differences from the reference over the
+//! stations' bins: `U` in units of |U_0|, `k` in units of |U_0|^2.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use ndarray::Array2;
 
-use super::abl_particles::{default_stations, Bins, ParticleStations};
+use super::abl_particles::{default_stations, Bins};
 use crate::io::plot::{error_figure, CurvePanel, ErrorPoint};
 use crate::io::{CsvSeries, IoError};
 use crate::pipeline::{Pipeline, RunError};
-use crate::scene::{self, Scene};
+use crate::scene::{self, Axis, Scene, Station, Statistics};
 use crate::Real;
 
 /// What `eddy bench-abl` measures.
@@ -84,28 +87,6 @@ pub struct AblBenchRow {
 /// velocity U and k.
 pub type Profiles = Vec<Vec<(Real, Real)>>;
 
-/// The statistics a run accumulates, on grid cells or fluid particles.
-enum Sampler {
-    Grid(Stations, usize),
-    Particles(ParticleStations),
-}
-
-impl Sampler {
-    fn add(&mut self, p: &Pipeline, dt: Real) {
-        match self {
-            Sampler::Grid(s, _) => s.add(p, dt),
-            Sampler::Particles(s) => s.add(p, dt),
-        }
-    }
-
-    fn profiles(&self) -> Profiles {
-        match self {
-            Sampler::Grid(s, rows) => s.profiles(*rows),
-            Sampler::Particles(s) => s.profiles(),
-        }
-    }
-}
-
 /// The coarse bins of a comparison.
 #[derive(Debug, Clone, Copy)]
 enum Coarse {
@@ -131,88 +112,44 @@ impl Coarse {
         }
     }
 
-    fn sampler(&self, p: &Pipeline, stations: &[Real]) -> Sampler {
-        match self {
-            Coarse::Grid(size, rows) => Sampler::Grid(Stations::new(p, stations, *size), *rows),
-            Coarse::Particles(bins) => Sampler::Particles(ParticleStations::new(stations, *bins)),
-        }
-    }
-}
-
-/// Time-and-span statistics of the velocity at the stations: per station, per (x, y) cell of
-/// the run's grid, sums of u_i dt and u_i^2 dt over the span, and the time they cover.
-struct Stations {
-    /// Per station: the first x index and the cells' sums `[u, v, w, uu, vv, ww]`, indexed
-    /// [x offset, y].
-    planes: Vec<(usize, Array2<[Real; 6]>)>,
-    time: Real,
-    /// Cells per span (z) summed into each entry.
-    span: usize,
-}
-
-impl Stations {
-    /// The cells of `pipeline`'s grid inside the coarse bin column around each station, whose
-    /// coarse cell size is `coarse` (m).
-    fn new(p: &Pipeline, stations: &[Real], coarse: Real) -> Self {
-        let mac = &p.sim.grid.as_ref().expect("a grid scene").mac;
-        let per_bin = (coarse / mac.dx).round().max(1.0) as usize;
-        let planes = stations
-            .iter()
-            .map(|&x| {
-                let bin = ((x - mac.origin.x) / coarse).floor().max(0.0);
-                let first = (bin as usize * per_bin).min(mac.dims[0] - per_bin);
-                (first, Array2::from_elem((per_bin, mac.dims[1]), [0.0; 6]))
-            })
-            .collect();
-        Self {
-            planes,
-            time: 0.0,
-            span: mac.dims[2],
-        }
-    }
-
-    fn add(&mut self, p: &Pipeline, dt: Real) {
-        let mac = &p.sim.grid.as_ref().expect("a grid scene").mac;
-        for (first, sums) in &mut self.planes {
-            for ((i, j), s) in sums.indexed_iter_mut() {
-                for k in 0..mac.dims[2] {
-                    let u = mac.velocity_at_sample(None, [*first + i, j, k]);
-                    for c in 0..3 {
-                        s[c] += u[c] * dt;
-                        s[3 + c] += u[c] * u[c] * dt;
-                    }
-                }
+    /// The statistics every run keeps: from `from`, on particles on a lattice of the coarse
+    /// spacing, with a station at each of `stations` (m along x): the coarse cell of the
+    /// scene's lattice around it, cut into the coarse bins.
+    fn statistics(&self, scene: &Scene, stations: &[Real], from: Real) -> Statistics {
+        let (lo, hi) = (scene.domain.min, scene.domain.max);
+        let (size, axis, bins, across) = match *self {
+            Coarse::Grid(size, rows) => (size, Axis::Y, rows, (lo[1], lo[1] + rows as Real * size)),
+            Coarse::Particles(b) => (
+                b.size,
+                Axis::Z,
+                b.count,
+                (b.origin, b.origin + b.count as Real * b.size),
+            ),
+        };
+        let station = |(k, &x): (usize, &Real)| {
+            let cell = ((x - lo[0]) / size).floor().max(0.0);
+            let (x0, x1) = (lo[0] + cell * size, lo[0] + (cell + 1.0) * size);
+            let (mut min, mut max) = (lo, hi);
+            (min[0], max[0]) = (x0, x1.min(hi[0]));
+            let a = axis.index();
+            (min[a], max[a]) = across;
+            Station {
+                name: format!("x{k}"),
+                min,
+                max,
+                axis,
+                bins,
+                // The step's periodic span is homogeneous: its cells are one ensemble.
+                pool: matches!(self, Coarse::Grid(..)).then_some(Axis::Z),
             }
+        };
+        Statistics {
+            from,
+            every: 1,
+            bin: matches!(self, Coarse::Particles(_)).then_some(size),
+            batches: 10,
+            stations: stations.iter().enumerate().map(station).collect(),
         }
-        self.time += dt;
-    }
-
-    /// Per station, per coarse y bin: (U, k) averaged over the run's cells in the bin.
-    fn profiles(&self, coarse_rows: usize) -> Profiles {
-        let n = self.time * self.span as Real;
-        self.planes
-            .iter()
-            .map(|(_, sums)| {
-                let rows = sums.dim().1;
-                let per = rows / coarse_rows;
-                (0..coarse_rows)
-                    .map(|b| {
-                        let cells = sums.slice(ndarray::s![.., b * per..(b + 1) * per]);
-                        let count = cells.len() as Real;
-                        let (mut u, mut k) = (0.0, 0.0);
-                        for s in cells {
-                            let mean: [Real; 3] = std::array::from_fn(|c| s[c] / n);
-                            u += mean[0];
-                            k += 0.5
-                                * (0..3)
-                                    .map(|c| s[3 + c] / n - mean[c] * mean[c])
-                                    .sum::<Real>();
-                        }
-                        (u / count, k / count)
-                    })
-                    .collect()
-            })
-            .collect()
     }
 }
 
@@ -225,7 +162,9 @@ fn measure(
     coarse: Coarse,
     from: Real,
 ) -> Result<(AblBenchRow, Profiles), RunError> {
-    let mut p = Pipeline::build(scene)?;
+    let mut scene = scene.clone();
+    scene.statistics = Some(coarse.statistics(&scene, stations, from));
+    let mut p = Pipeline::build(&scene)?;
     let end = scene.time.end.ok_or_else(|| {
         RunError::Unsupported("bench-abl: the scene needs a time.end to average up to".into())
     })?;
@@ -234,7 +173,6 @@ fn measure(
         (None, Some(sph)) => sph.fluid.len(),
         (None, None) => 0,
     };
-    let mut stats = coarse.sampler(&p, stations);
     let bar = ProgressBar::new(1000).with_message(label);
     bar.set_style(
         ProgressStyle::with_template(
@@ -265,14 +203,23 @@ fn measure(
         bar.set_position((1000.0 * p.sim.time() / end) as u64);
         if rec.time + rec.dt > from {
             let dt = rec.dt.min(rec.time + rec.dt - from);
-            stats.add(&p, dt);
             counted += vortices(&p) as Real * dt;
             window += dt;
         }
     }
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let profiles = stats.profiles();
+    let stats = &p.sim.statistics[0].stats;
+    let profiles: Profiles = stats
+        .stations
+        .iter()
+        .map(|s| {
+            s.profile(&stats.cells)
+                .iter()
+                .map(|b| (b.mean[0], b.k))
+                .collect()
+        })
+        .collect();
     let bins: Vec<Real> = profiles
         .iter()
         .flatten()
@@ -360,6 +307,24 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     } else {
         options.stations.clone()
     };
+    // A station's coarse cell must lie in the domain: one beyond it measures nothing.
+    let (x0, x1) = (base.domain.min[0], base.domain.max[0]);
+    let size = match coarse {
+        Coarse::Grid(size, _) => size,
+        Coarse::Particles(b) => b.size,
+    };
+    let (inside, outside): (Vec<Real>, Vec<Real>) = stations
+        .into_iter()
+        .partition(|&x| x >= x0 && x0 + ((x - x0) / size).floor() * size + size <= x1 + 1e-9);
+    if !outside.is_empty() {
+        tracing::warn!("bench-abl: stations {outside:?} lie beyond the domain (x up to {x1} m) and are left out");
+    }
+    if inside.is_empty() {
+        return Err(RunError::Unsupported(format!(
+            "bench-abl: no station lies in the domain (x from {x0} to {x1} m)"
+        )));
+    }
+    let stations = inside;
     let from = options.from.unwrap_or(from);
     let seeded =
         |label: &'static str, extra: Vec<String>| -> Vec<(&'static str, Result<Scene, RunError>)> {

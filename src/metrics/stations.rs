@@ -6,7 +6,10 @@
 //! lies in the bin), each cell weighted by the weight of its samples: on a grid every fluid
 //! cell alike, on particle bins by the particles they held, so `U` is the particles' average.
 //! `k` is then the mean of the cells' own temporal fluctuations (the mean shear across a bin is
-//! not counted as turbulence), the same on a grid and on particles.
+//! not counted as turbulence), the same on a grid and on particles. Along a homogeneous
+//! direction (a periodic span) the cells can be pooled first (`pool`): their moments combine as
+//! one ensemble (Chan, Golub & LeVeque's rule), so the spread of their means counts as
+//! fluctuation, as averaging over the span does in channel-flow statistics.
 //!
 //! **Confidence.** The averaging window is cut into batches of equal length; each batch's bin
 //! values come from the moments its samples added (the lattice's moments at its end less those
@@ -30,6 +33,8 @@ pub struct StationSpec {
     /// 0, 1 or 2 for x, y, z.
     pub axis: usize,
     pub bins: usize,
+    /// The axis along which cells are pooled as one ensemble, if any.
+    pub pool: Option<usize>,
 }
 
 /// One bin of a profile: its centre along the axis, `U`, `k` and their 95 % half-widths (NaN
@@ -50,8 +55,9 @@ type BinValues = ([Real; 3], Real);
 #[derive(Debug, Clone)]
 pub struct Station {
     pub spec: StationSpec,
-    /// Per bin, the flat indices of its lattice cells.
-    cells: Vec<Vec<usize>>,
+    /// Per bin, its groups of lattice cells (flat indices) pooled as one ensemble: one cell
+    /// each without `pool`, the cells of one line along the pooled axis with it.
+    cells: Vec<Vec<Vec<usize>>>,
     /// Its cells' moments when the current batch began, in the order of `cells`.
     start: Vec<CellMoments>,
     /// Per complete batch, per bin: `U` and `k` of the batch's samples.
@@ -63,7 +69,7 @@ impl Station {
     /// lattice) or the box lies outside it.
     pub fn new(spec: StationSpec, lattice: &Lattice) -> Result<Self, String> {
         let width = (spec.max[spec.axis] - spec.min[spec.axis]) / spec.bins as Real;
-        let mut cells = vec![Vec::new(); spec.bins];
+        let mut groups: Vec<Vec<([usize; 3], usize)>> = vec![Vec::new(); spec.bins];
         let [nx, ny, nz] = lattice.dims;
         for i in 0..nx {
             for j in 0..ny {
@@ -75,10 +81,23 @@ impl Station {
                         continue;
                     }
                     let b = ((c[spec.axis] - spec.min[spec.axis]) / width).floor() as usize;
-                    cells[b.min(spec.bins - 1)].push((i * ny + j) * nz + k);
+                    let mut key = [i, j, k];
+                    if let Some(a) = spec.pool {
+                        key[a] = 0;
+                    }
+                    groups[b.min(spec.bins - 1)].push((key, (i * ny + j) * nz + k));
                 }
             }
         }
+        let cells: Vec<Vec<Vec<usize>>> = groups
+            .into_iter()
+            .map(|mut bin| {
+                bin.sort_by_key(|&(key, flat)| (key, flat));
+                bin.chunk_by(|a, b| a.0 == b.0)
+                    .map(|g| g.iter().map(|&(_, flat)| flat).collect())
+                    .collect()
+            })
+            .collect();
         if let Some(b) = cells.iter().position(Vec::is_empty) {
             return Err(format!(
                 "station {:?}: bin {b} ({width:.4} m along {}) holds no cell centre of the \
@@ -89,7 +108,7 @@ impl Station {
                 lattice.spacing
             ));
         }
-        let n = cells.iter().map(Vec::len).sum();
+        let n = cells.iter().flatten().map(Vec::len).sum();
         Ok(Self {
             spec,
             cells,
@@ -101,7 +120,7 @@ impl Station {
     /// Ends the current batch at the lattice's moments `cells`, keeping its bin values, and
     /// begins the next.
     pub fn next_batch(&mut self, cells: &[CellMoments]) {
-        let now: Vec<CellMoments> = self.cells.iter().flatten().map(|&c| cells[c]).collect();
+        let now = self.moments(cells);
         let since: Vec<CellMoments> = now
             .iter()
             .zip(&self.start)
@@ -116,22 +135,39 @@ impl Station {
         self.batches.len()
     }
 
-    /// Per bin, `U` and `k` of `moments` (its cells' moments, in the order of `cells`).
+    /// The station's cells' moments, in the order of `cells`.
+    fn moments(&self, cells: &[CellMoments]) -> Vec<CellMoments> {
+        self.cells
+            .iter()
+            .flatten()
+            .flatten()
+            .map(|&c| cells[c])
+            .collect()
+    }
+
+    /// Per bin, `U` and `k` of `moments` (its cells' moments, in the order of `cells`): each
+    /// group pooled, then the groups averaged.
     fn bins(&self, moments: &[CellMoments]) -> Vec<BinValues> {
         let mut at = 0;
         self.cells
             .iter()
             .map(|bin| {
-                let own = &moments[at..at + bin.len()];
-                at += bin.len();
-                average(own)
+                let pooled: Vec<CellMoments> = bin
+                    .iter()
+                    .map(|group| {
+                        let own = &moments[at..at + group.len()];
+                        at += group.len();
+                        own.iter().fold(CellMoments::default(), |a, c| a.merge(c))
+                    })
+                    .collect();
+                average(&pooled)
             })
             .collect()
     }
 
     /// The profile of the lattice's moments `cells`, with the batches' half-widths.
     pub fn profile(&self, cells: &[CellMoments]) -> Vec<BinProfile> {
-        let now: Vec<CellMoments> = self.cells.iter().flatten().map(|&c| cells[c]).collect();
+        let now = self.moments(cells);
         let width = (self.spec.max[self.spec.axis] - self.spec.min[self.spec.axis])
             / self.spec.bins as Real;
         self.bins(&now)
@@ -192,6 +228,34 @@ pub fn half_width(values: &[Real]) -> Real {
 }
 
 impl CellMoments {
+    /// The moments of this cell's samples and `other`'s together (Chan, Golub & LeVeque 1979):
+    /// W = W_a + W_b, U = U_a + (W_b / W) d, C = C_a + C_b + (W_a W_b / W) d d, d = U_b - U_a.
+    pub fn merge(&self, other: &CellMoments) -> CellMoments {
+        let w = self.weight + other.weight;
+        if other.weight <= 0.0 {
+            return *self;
+        }
+        if self.weight <= 0.0 {
+            return *other;
+        }
+        let f = other.weight / w;
+        let d: [Real; 3] = std::array::from_fn(|c| other.mean[c] - self.mean[c]);
+        let g = self.weight * other.weight / w;
+        let mut co = self.co;
+        for ((co, b), (x, y)) in co.iter_mut().zip(other.co).zip(STRESS_PAIRS) {
+            *co += b + g * d[x] * d[y];
+        }
+        let blend = |a: Real, b: Real| a + f * (b - a);
+        CellMoments {
+            weight: w,
+            samples: self.samples + other.samples,
+            mean: std::array::from_fn(|c| self.mean[c] + f * d[c]),
+            co,
+            vorticity: std::array::from_fn(|c| blend(self.vorticity[c], other.vorticity[c])),
+            enstrophy: blend(self.enstrophy, other.enstrophy),
+        }
+    }
+
     /// The moments of the samples added since `earlier` (this cell's moments at an earlier
     /// time): the combination rule of Chan, Golub & LeVeque read backwards, W_b = W - W_e,
     /// U_b = (W U - W_e U_e) / W_b, C_b = C - C_e - (W_e W_b / W) (U_b - U_e)(U_b - U_e).
@@ -224,7 +288,8 @@ mod tests {
     use super::*;
 
     /// Moments of the second half of a series, by `since`, equal those of the second half
-    /// alone; the half-width of known values is t s / sqrt(n).
+    /// alone, and the halves merged those of the whole; the half-width of known values is
+    /// t s / sqrt(n).
     #[test]
     fn moments_since_an_earlier_time_are_those_of_the_later_samples() {
         let sample = |n: usize| {
@@ -249,6 +314,7 @@ mod tests {
             add(&mut all, n);
             add(&mut second, n);
         }
+        let merged = first.merge(&second);
         let since = CellMoments::since(&all, &first);
         assert_eq!(since.samples, second.samples);
         let close = |a: Real, b: Real| (a - b).abs() <= 1e-12 * (1.0 + b.abs());
@@ -261,6 +327,14 @@ mod tests {
             assert!(close(*a, b), "{a} {b}");
         }
         assert!(close(since.enstrophy, second.enstrophy));
+        // ... and the two halves merged are the whole.
+        assert_eq!(merged.samples, all.samples);
+        for (a, b) in merged.stress().iter().zip(all.stress()) {
+            assert!(close(*a, b), "{a} {b}");
+        }
+        for c in 0..3 {
+            assert!(close(merged.mean[c], all.mean[c]));
+        }
         // t(0.975, 3) = 3.182446; values 1, 2, 3, 4: s = sqrt(5/3).
         let h = half_width(&[1.0, 2.0, 3.0, 4.0]);
         assert!(
@@ -289,6 +363,7 @@ mod tests {
             max: Vec3::repeat(1.0),
             axis: 0,
             bins: 1,
+            pool: None,
         };
         let mut missed = 0;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);

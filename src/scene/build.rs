@@ -188,6 +188,7 @@ pub fn statistics_spec(scene: &Scene) -> Option<StatisticsSpec> {
                 max: Vec3::from(s.max),
                 axis: s.axis.index(),
                 bins: s.bins,
+                pool: s.pool.map(|a| a.index()),
             })
             .collect(),
         batch: scene

@@ -181,6 +181,18 @@ fn default_batches() -> u64 {
     10
 }
 
+impl Default for Statistics {
+    fn default() -> Self {
+        Self {
+            from: 0.0,
+            every: default_every(),
+            bin: None,
+            batches: default_batches(),
+            stations: Vec::new(),
+        }
+    }
+}
+
 /// A station: the box from `min` to `max` cut into `bins` equal bins along `axis`; each bin's
 /// time-averaged U and k (averaged over the statistics' cells whose centres lie in it) with
 /// their 95 % confidence half-widths, at every frame time.
@@ -197,6 +209,10 @@ pub struct Station {
     pub axis: Axis,
     /// Bins along `axis`.
     pub bins: usize,
+    /// A homogeneous direction (a periodic span) along which the cells are pooled as one
+    /// ensemble, so the spread of their means counts as fluctuation; none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pool: Option<Axis>,
 }
 
 fn default_every() -> u64 {

@@ -116,11 +116,14 @@ pub enum Metric {
     OpenBoundarySeconds,
     /// Wall-clock time of the whole SPH step (solves, hooks, forces, positions), s.
     StepSeconds,
+    /// Fluid particles that have left the domain through sides no wall closes, removed and
+    /// counted so far (cumulative, the step's own included; see `fluid.lost_fraction`).
+    LostParticles,
 }
 
 impl Metric {
     /// Every metric, in column order.
-    pub const ALL: [Metric; 16] = [
+    pub const ALL: [Metric; 17] = [
         Metric::KineticEnergy,
         Metric::PotentialEnergy,
         Metric::DensityErrorAvg,
@@ -137,6 +140,7 @@ impl Metric {
         Metric::Particles,
         Metric::OpenBoundarySeconds,
         Metric::StepSeconds,
+        Metric::LostParticles,
     ];
     /// Column name in `metrics.csv`.
     pub fn column(self) -> &'static str {
@@ -157,6 +161,7 @@ impl Metric {
             Metric::Particles => "particles",
             Metric::OpenBoundarySeconds => "open_boundary_seconds",
             Metric::StepSeconds => "step_seconds",
+            Metric::LostParticles => "lost_particles",
         }
     }
 }

@@ -297,8 +297,12 @@ fn run_one(
     let rate = |n: usize| s.steps as f64 * n as f64 / s.wall_seconds / 1e6;
     let mut sizes = Vec::new();
     if s.fluid_particles > 0 {
+        let lost = match s.lost_particles {
+            0 => String::new(),
+            n => format!(" ({n} lost through open sides)"),
+        };
         sizes.push(format!(
-            "{} fluid particles, {} boundary particles, {:.2} M fluid particle-steps/s",
+            "{} fluid particles{lost}, {} boundary particles, {:.2} M fluid particle-steps/s",
             s.fluid_particles,
             s.boundary_particles,
             rate(s.fluid_particles)

@@ -296,6 +296,8 @@ fn solvers_build_from_parameters_alone() {
         wall_viscosity: Vec::new(),
         limits: StepLimits::default(),
         domain: (Vec3::repeat(-5.0), Vec3::repeat(5.0)),
+        lost_fraction: 0.01,
+        ramp: 0.0,
         container: false,
         inflows: Vec::new(),
         outflows: Vec::new(),

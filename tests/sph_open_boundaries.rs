@@ -429,7 +429,7 @@ fn laminar_flow_between_plates_approaches_the_parabola() {
     );
 }
 
-/// The river of `scenes/abl_sph_river.toml` with its three pillars and its turbulence taken
+/// The river of `scenes/abl_sph_river_quick.toml` with its three pillars and its turbulence taken
 /// out, the natural baseline for its wakes (issue 46 saw a particle leave through the bed near
 /// the inflow corner at t = 0.16 s): it runs its 3 s with every fluid particle inside the
 /// domain, the water's count held by the inflow and the outflow, and no particle faster than
@@ -437,7 +437,7 @@ fn laminar_flow_between_plates_approaches_the_parabola() {
 /// breaks).
 #[test]
 fn the_river_without_pillars_runs_its_three_seconds() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/abl_sph_river.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/abl_sph_river_quick.toml");
     let text = std::fs::read_to_string(&path).expect("the river scene");
     let blocks: Vec<&str> = text.split("\n\n").collect();
     let kept: Vec<&str> = blocks
@@ -474,4 +474,100 @@ fn the_river_without_pillars_runs_its_three_seconds() {
     );
     let fall = (2.0 * 9.81 * (hi.y - lo.y)).sqrt();
     assert!(fastest < 1.0 + fall, "{fastest} m/s in a 1 m/s river");
+}
+
+/// r(t) of a smooth start over `ramp` seconds (`eddy::sph::ramp`), written out here.
+fn ramp_factor(t: Real, ramp: Real) -> Real {
+    if t >= ramp {
+        1.0
+    } else {
+        0.5 * (1.0 - (std::f64::consts::PI * t / ramp).cos())
+    }
+}
+
+/// A smooth start (`fluid.ramp = 0.2`): a free block without gravity or walls starts at rest
+/// and every particle moves at v0 r(t) after every step, to round-off, and at v0 from the
+/// ramp's end; in the channel the inflow buffer moves at r(t) u and the emitter spawns the
+/// layers that r(t) u carries in (the sum of r u dt over the steps, not u t: five layers fewer
+/// by the ramp's end). The plan says so.
+#[test]
+fn a_smooth_start_follows_the_ramp() {
+    let ramp = 0.2;
+    let block = r#"
+name = "block"
+gravity = [0.0, 0.0, 0.0]
+[domain]
+min = [-1.0, -1.0, -1.0]
+max = [2.0, 2.0, 2.0]
+[time]
+end = 0.3
+dt_max = 5e-3
+[fluid]
+spacing = 0.02
+ramp = 0.2
+[[fluid.blocks]]
+min = [0.0, 0.0, 0.0]
+max = [0.2, 0.2, 0.2]
+velocity = [1.0, 0.0, -0.5]
+[output]
+vtk = false
+metrics = []
+"#;
+    let v0 = Vec3::new(1.0, 0.0, -0.5);
+    let scene = parse_str(block, Path::new("block.toml"), &[]).expect("the block loads");
+    let plan = eddy::pipeline::Plan::of(&built(block)).to_string();
+    assert!(plan.contains("smooth start over 0.2 s"), "{plan}");
+    let mut s = eddy::pipeline::sph_solver(&scene).expect("builds");
+    assert!(s.fluid.v.iter().all(|v| *v == Vec3::zeros()));
+    while s.time() < 0.3 - 1e-9 {
+        s.step(Some(0.3)).expect("steps");
+        let expected = ramp_factor(s.time(), ramp) * v0;
+        let worst = s
+            .fluid
+            .v
+            .iter()
+            .map(|v| (v - expected).norm())
+            .fold(0.0, Real::max);
+        assert!(worst < 1e-13, "t = {}: {worst} m/s off", s.time());
+    }
+
+    let (l, hh, w, h, u) = (0.4, 0.1, 0.1, 0.01, 0.5);
+    let text = channel(l, hh, w, h, u, "").replace(
+        &format!("spacing = {h}\n"),
+        &format!("spacing = {h}\nramp = {ramp}\n"),
+    );
+    assert!(text.contains("ramp = 0.2"), "{text}");
+    let mut p = built(&text);
+    {
+        let fluid = &mut p.sim.sph.as_mut().expect("SPH").fluid;
+        let k = fluid.carry("old");
+        fluid.carried[k].1.fill(Vec3::x());
+    }
+    let sites = 100.0;
+    let mut carried = 0.0;
+    while sph(&p).time() < 0.3 - 1e-9 {
+        let rec = p.step(None, None).expect("steps");
+        let s = sph(&p);
+        let r = ramp_factor(s.time(), ramp);
+        carried += r * u * rec.dt;
+        for (x, v) in s.fluid.x.iter().zip(&s.fluid.v) {
+            if x.x < eddy::sph::open::BUFFER_LAYERS * h {
+                assert!(
+                    (v - Vec3::new(r * u, 0.0, 0.0)).norm() < 1e-12,
+                    "t = {}: {v} in the buffer against r u = {}",
+                    s.time(),
+                    r * u
+                );
+            }
+        }
+        let spawned = s.fluid.carried[0].1.iter().filter(|c| c.x == 0.0).count() as Real;
+        assert!(
+            (spawned - sites * (carried / h).floor()).abs() <= sites,
+            "t = {}: {spawned} spawned against {} layers carried in",
+            s.time(),
+            carried / h
+        );
+    }
+    // u (0.3 s - 0.2 s / 2) = 0.1 m: ten layers, where an impulsive start spawns fifteen.
+    assert!((carried - 0.1).abs() < 1e-3, "{carried}");
 }

@@ -104,7 +104,7 @@ impl From<GridBenchArgs> for GridBenchOptions {
 #[derive(Debug, Clone, clap::Args)]
 pub struct AblBenchArgs {
     /// A scene with an `abl` obstacle: the backward-facing step on a grid (the default), or a
-    /// stream past obstacles on SPH particles (e.g. scenes/abl_sph_river.toml).
+    /// stream past obstacles on SPH particles (e.g. scenes/abl_sph_river_quick.toml).
     #[arg(default_value = "scenes/abl_backward_step.toml")]
     pub scene: PathBuf,
     /// Resolution factor of the plain reference run [default: 4 on a grid, 2 on particles].

@@ -218,6 +218,15 @@ impl RigidBody {
         v + w.cross(&(x.coords - origin))
     }
 
+    /// An upper bound on the speed of any point of the body at any time: the origin's fastest
+    /// speed plus the fastest spin times the farthest corner of its bounding box.
+    pub fn fastest_speed(&self) -> Real {
+        let (v, w) = self.kinematics.fastest();
+        let (lo, hi) = self.local_aabb();
+        let reach = lo.coords.abs().sup(&hi.coords.abs()).norm();
+        v + w * reach
+    }
+
     /// Signed distance from the world point `x` to the surface at time `t`: negative inside the
     /// solid.
     pub fn signed_distance(&self, t: Real, x: &Point3) -> Real {

@@ -117,6 +117,26 @@ impl Kinematics {
         }
     }
 
+    /// The largest speed of the origin and the largest angular speed over all time.
+    pub(crate) fn fastest(&self) -> (Real, Real) {
+        match self {
+            Kinematics::Constant {
+                linear, angular, ..
+            } => (linear.norm(), angular.norm()),
+            Kinematics::Keyframed { keys, turns } => keys
+                .windows(2)
+                .zip(turns)
+                .map(|(w, turn)| {
+                    let dt = w[1].t - w[0].t;
+                    (
+                        (w[1].position - w[0].position).norm() / dt,
+                        turn.norm() / dt,
+                    )
+                })
+                .fold((0.0, 0.0), |(v, w), (sv, sw)| (v.max(sv), w.max(sw))),
+        }
+    }
+
     /// Local-to-world transform at time `t`.
     pub(crate) fn pose(&self, t: Real) -> Isometry3<Real> {
         match self {

@@ -75,7 +75,8 @@ impl MetricsRecorder {
                 | Metric::DivergenceIterations
                 | Metric::RefinementSeconds
                 | Metric::OpenBoundarySeconds
-                | Metric::StepSeconds => 0.0,
+                | Metric::StepSeconds
+                | Metric::LostParticles => 0.0,
                 // A grid's: validation keeps them out of an SPH fluid's list.
                 Metric::MaxDivergence
                 | Metric::PressureResidual
@@ -108,6 +109,7 @@ impl MetricsRecorder {
                 Metric::RefinementSeconds => stats.refinement_seconds,
                 Metric::OpenBoundarySeconds => stats.open_seconds,
                 Metric::StepSeconds => stats.step_seconds,
+                Metric::LostParticles => stats.lost as Real,
                 _ => *v,
             });
         }

@@ -133,11 +133,14 @@ pub enum Metric {
     AdvectSeconds,
     /// Grid: wall-clock time of the projection, s.
     ProjectSeconds,
+    /// Fluid particles that have left the domain through sides no wall closes, removed and
+    /// counted so far (cumulative, the step's own included; see `fluid.lost_fraction`).
+    LostParticles,
 }
 
 impl Metric {
     /// What an SPH fluid offers, in column order.
-    pub const SPH: [Metric; 16] = [
+    pub const SPH: [Metric; 17] = [
         Metric::KineticEnergy,
         Metric::PotentialEnergy,
         Metric::DensityErrorAvg,
@@ -154,6 +157,7 @@ impl Metric {
         Metric::Particles,
         Metric::OpenBoundarySeconds,
         Metric::StepSeconds,
+        Metric::LostParticles,
     ];
 
     /// What a MAC grid offers, in column order.
@@ -199,6 +203,7 @@ impl Metric {
             Metric::ChangeRate => "change_rate",
             Metric::AdvectSeconds => "advect_seconds",
             Metric::ProjectSeconds => "project_seconds",
+            Metric::LostParticles => "lost_particles",
         }
     }
 

@@ -192,6 +192,7 @@ impl Run {
             time: p.sim.time(),
             frames: p.outputs.frames(),
             fluid_particles: sph.map_or(0, |s| s.fluid.len()),
+            lost_particles: sph.map_or(0, |s| s.lost_particles()),
             boundary_particles: sph.map_or(0, |s| s.boundary.len()),
             grid_cells: p.sim.grid.as_ref().map_or(0, |g| g.mac.cell_count()),
             wall_seconds: self.started.elapsed().as_secs_f64(),
@@ -289,6 +290,9 @@ fn update_bar(bar: &ProgressBar, end: &End, p: &Pipeline, rec: &StepRecord) {
             ", {} CG iterations, change {:.1e}/s",
             g.pressure_iterations, g.change_rate
         );
+    }
+    if let Some(lost) = rec.sph.map(|s| s.lost).filter(|&n| n > 0) {
+        msg += &format!(", {lost} fluid particles lost");
     }
     bar.set_message(msg);
 }

@@ -116,6 +116,8 @@ pub struct RunSummary {
     pub time: Real,
     pub frames: usize,
     pub fluid_particles: usize,
+    /// Fluid particles lost through open sides of the domain (`fluid.lost_fraction`).
+    pub lost_particles: u64,
     pub boundary_particles: usize,
     /// Cells of the grid (0 without one).
     pub grid_cells: usize,

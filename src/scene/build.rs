@@ -50,6 +50,8 @@ pub fn sph_params(scene: &Scene) -> Option<SphParams> {
         wall_viscosity: wall_viscosities(scene),
         limits: step_limits(scene),
         domain: (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max)),
+        lost_fraction: fluid.lost_fraction,
+        ramp: fluid.ramp,
         container: scene.container.is_some(),
         inflows: fluid.inflow.clone(),
         outflows: fluid.outflow.clone(),

@@ -106,6 +106,12 @@ pub static RANGES: &[KeyRange] = &[
         "inside the domain's extent along the side, at least `min` + `fluid.spacing`",
     ),
     rule("fluid.outflow", "at least one in a scene with an inflow"),
+    both(
+        "fluid.ramp",
+        NON_NEGATIVE.noted("s"),
+        "0 unless every block has the same velocity",
+    ),
+    range("fluid.lost_fraction", Interval::closed(0.0, 1.0)),
     rule("fluid.outflow[].side", "each side once, and not an inflow's"),
     both(
         "fluid.inflow[].velocity",

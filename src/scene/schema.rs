@@ -24,9 +24,10 @@ pub struct Scene {
     /// Seed of every random generator in the run, so runs reproduce exactly.
     #[serde(default)]
     pub seed: u64,
-    /// The simulation domain; a particle that leaves it (by more than 0.6 particle spacings,
-    /// the depth of the wall samples behind a container flush with it) stops the run as
-    /// unstable.
+    /// The simulation domain. A fluid particle beyond it (by more than 0.6 particle spacings,
+    /// the depth of the wall samples behind a container flush with it) in the open, having left
+    /// through a side no wall closes, is removed and counted (`fluid.lost_fraction`); one beyond
+    /// it inside a solid went through a wall, and stops the run as unstable.
     pub domain: Domain,
     /// Gravitational acceleration in m/s^2.
     #[serde(default = "default_gravity")]
@@ -146,10 +147,25 @@ pub struct Fluid {
     /// Outflow sides of the domain.
     #[serde(default)]
     pub outflow: Vec<crate::sph::Outflow>,
+    /// Smooth start, s: the inflows' velocity and the blocks' velocity rise from zero as
+    /// (1 - cos(pi t / ramp)) / 2; the blocks start at rest and the whole fluid is accelerated
+    /// by their velocity times the ramp's rate, a uniform body acceleration (0: every block
+    /// moves at its velocity and every inflow at its own from t = 0).
+    #[serde(default)]
+    pub ramp: Real,
+    /// The share of the fluid particles that may leave the domain through sides no wall
+    /// closes (a splash over the top or a bank): each is removed and counted (`lost_particles`
+    /// in metrics.csv), and the run stops as unstable once they exceed this share of the
+    /// particles present (0: at the first).
+    #[serde(default = "default_lost_fraction")]
+    pub lost_fraction: Real,
 }
 
 fn default_density() -> Real {
     1000.0
+}
+fn default_lost_fraction() -> Real {
+    0.01
 }
 
 /// Running statistics: per grid cell, or per bin of a lattice over an SPH fluid's domain, the

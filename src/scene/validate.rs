@@ -52,6 +52,21 @@ impl Scene {
                 }
                 c.vec3(&format!("{key}.velocity"), block.velocity)?;
             }
+            c.ranged("fluid.ramp", fluid.ramp)?;
+            c.ranged("fluid.lost_fraction", fluid.lost_fraction)?;
+            let blocks = &fluid.blocks;
+            let differs = blocks.iter().position(|b| b.velocity != blocks[0].velocity);
+            if let Some(i) = differs.filter(|_| fluid.ramp > 0.0) {
+                return Err(c.invalid(
+                    "fluid.ramp",
+                    Number(fluid.ramp),
+                    format!(
+                        "0 while the blocks' velocities differ (fluid.blocks[0] and \
+                         fluid.blocks[{i}]): the ramp accelerates the whole fluid by one body \
+                         acceleration"
+                    ),
+                ));
+            }
             fluid.validate_open(&c, &self.domain)?;
         }
         let bodies = self

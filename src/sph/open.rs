@@ -40,9 +40,10 @@ struct Emitter {
 }
 
 impl Emitter {
-    /// The prescribed velocity at `x` (the profile's factor times the peak).
-    fn velocity(&self, x: &Vec3) -> Vec3 {
-        self.inflow.factor(x) * Vec3::from(self.inflow.velocity)
+    /// The prescribed velocity at `x` (the profile's factor times the peak), times `ramp`
+    /// (`super::ramp`'s r(t), 1 after a smooth start).
+    fn velocity(&self, x: &Vec3, ramp: Real) -> Vec3 {
+        ramp * (self.inflow.factor(x) * Vec3::from(self.inflow.velocity))
     }
 
     /// Distance of `x` from the plane into the domain, if it lies over the rectangle.
@@ -54,12 +55,12 @@ impl Emitter {
         over.then(|| (x[side.axis()] - self.plane) * side.inward()[side.axis()])
     }
 
-    /// The particle of site `s` at `depth` from the plane, with its velocity.
-    fn particle(&self, s: usize, depth: Real) -> (Vec3, Vec3) {
+    /// The particle of site `s` at `depth` from the plane, with its velocity at `ramp`.
+    fn particle(&self, s: usize, depth: Real, ramp: Real) -> (Vec3, Vec3) {
         let axis = self.inflow.side.axis();
         let mut p = self.sites[s];
         p[axis] = self.plane + depth * self.inflow.side.inward()[axis];
-        (p, self.velocity(&p))
+        (p, self.velocity(&p, ramp))
     }
 }
 
@@ -71,10 +72,11 @@ pub struct OpenBoundaries {
     spacing: Real,
 }
 
-/// What one exchange did: which particles were kept and how many were added after them.
+/// What one exchange does: which particles are kept, and the particles (position, velocity)
+/// appended after them.
 pub struct Exchange {
     pub keep: Vec<bool>,
-    pub added: usize,
+    pub added: Vec<(Vec3, Vec3)>,
 }
 
 impl OpenBoundaries {
@@ -115,7 +117,7 @@ impl OpenBoundaries {
                     }
                 }
                 let first: Vec<Vec3> = (0..e.sites.len())
-                    .map(|s| e.particle(s, 0.5 * spacing).0)
+                    .map(|s| e.particle(s, 0.5 * spacing, 1.0).0)
                     .collect();
                 let mut at = first.iter();
                 e.sites
@@ -149,8 +151,8 @@ impl OpenBoundaries {
 
     /// Before the first step: each emitter continues the lattice of the fluid already over its
     /// rectangle (the layer nearest the plane within a spacing), or spawns its first layer half
-    /// a spacing in.
-    pub fn prime(&mut self, fluid: &mut FluidParticles) {
+    /// a spacing in, at `ramp` times its velocity.
+    pub fn prime(&mut self, fluid: &mut FluidParticles, ramp: Real) {
         let h = self.spacing;
         let mut added = Vec::new();
         for e in &mut self.emitters {
@@ -161,7 +163,7 @@ impl OpenBoundaries {
                 .filter(|d| (0.0..h).contains(d))
                 .fold(Real::INFINITY, Real::min);
             let depth = if nearest.is_infinite() {
-                added.extend((0..e.sites.len()).map(|s| e.particle(s, 0.5 * h)));
+                added.extend((0..e.sites.len()).map(|s| e.particle(s, 0.5 * h, ramp)));
                 0.5 * h
             } else {
                 nearest
@@ -173,14 +175,15 @@ impl OpenBoundaries {
         }
     }
 
-    /// Sets the velocity of every particle in an inflow's buffer to the inflow's there.
-    pub fn impose(&self, x: &[Vec3], v: &mut [Vec3]) {
+    /// Sets the velocity of every particle in an inflow's buffer to the inflow's there, times
+    /// `ramp`.
+    pub fn impose(&self, x: &[Vec3], v: &mut [Vec3], ramp: Real) {
         if self.emitters.is_empty() {
             return;
         }
         x.par_iter().zip(v.par_iter_mut()).for_each(|(x, v)| {
             if let Some(e) = self.buffer_of(x) {
-                *v = e.velocity(x);
+                *v = e.velocity(x, ramp);
             }
         });
     }
@@ -207,9 +210,10 @@ impl OpenBoundaries {
         })
     }
 
-    /// After the positions moved by `dt`: removes the particles beyond an outflow plane and
-    /// spawns the inflow layers that are due. None when nothing changed.
-    pub fn exchange(&mut self, fluid: &mut FluidParticles, dt: Real) -> Option<Exchange> {
+    /// After the positions `x` moved by `dt`, the buffers at `ramp` times their velocity: the
+    /// particles beyond an outflow plane to remove and the inflow layers that are due. None
+    /// when nothing changes.
+    pub fn exchange(&mut self, x: &[Vec3], dt: Real, ramp: Real) -> Option<Exchange> {
         if self.is_empty() {
             return None;
         }
@@ -218,15 +222,14 @@ impl OpenBoundaries {
         for e in &mut self.emitters {
             let inward = e.inflow.side.inward();
             for s in 0..e.sites.len() {
-                e.last[s] += e.velocity(&e.sites[s]).dot(&inward) * dt;
+                e.last[s] += e.velocity(&e.sites[s], ramp).dot(&inward) * dt;
                 while e.last[s] >= 1.5 * h {
                     e.last[s] -= h;
-                    added.push(e.particle(s, e.last[s]));
+                    added.push(e.particle(s, e.last[s], ramp));
                 }
             }
         }
-        let keep: Vec<bool> = fluid
-            .x
+        let keep: Vec<bool> = x
             .par_iter()
             .map(|x| {
                 self.outflows.iter().all(|(o, plane)| {
@@ -239,11 +242,7 @@ impl OpenBoundaries {
         if !removed && added.is_empty() {
             return None;
         }
-        fluid.exchange(&keep, &added);
-        Some(Exchange {
-            keep,
-            added: added.len(),
-        })
+        Some(Exchange { keep, added })
     }
 
     /// One line for the plan.

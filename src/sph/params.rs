@@ -25,8 +25,14 @@ pub struct SphParams {
     /// (the body's `wall_viscosity`, else `viscosity.boundary`).
     pub wall_viscosity: Vec<Real>,
     pub limits: StepLimits,
-    /// Lower and upper corner of the domain, m: a particle that leaves it is an instability.
+    /// Lower and upper corner of the domain, m: a particle that leaves it through an open side
+    /// is removed and counted, one that leaves through a wall stops the run (`super::lost`).
     pub domain: (Vec3, Vec3),
+    /// The share of the fluid that may leave through open sides before the run stops.
+    pub lost_fraction: Real,
+    /// Seconds over which the inflows' velocity and the blocks' common velocity rise from zero
+    /// (`super::ramp`); 0 starts impulsively.
+    pub ramp: Real,
     /// The first body is a container (fluid is kept inside it, not outside).
     pub container: bool,
     /// Inflow emitters on the domain's sides.
@@ -48,6 +54,33 @@ pub enum DomainSide {
 }
 
 impl DomainSide {
+    /// The side normal to `axis`, the upper one when `max`.
+    pub fn of(axis: usize, max: bool) -> Self {
+        match (axis, max) {
+            (0, false) => Self::XMin,
+            (0, true) => Self::XMax,
+            (1, false) => Self::YMin,
+            (1, true) => Self::YMax,
+            (_, false) => Self::ZMin,
+            (_, true) => Self::ZMax,
+        }
+    }
+
+    /// Its index in [`Self::ALL`].
+    pub fn index(self) -> usize {
+        2 * self.axis() + usize::from(self.is_max())
+    }
+
+    /// Every side, in the order of [`Self::index`].
+    pub const ALL: [Self; 6] = [
+        Self::XMin,
+        Self::XMax,
+        Self::YMin,
+        Self::YMax,
+        Self::ZMin,
+        Self::ZMax,
+    ];
+
     /// The axis the side is normal to.
     pub fn axis(self) -> usize {
         match self {

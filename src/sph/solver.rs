@@ -11,20 +11,23 @@
 use super::boundary::BoundaryParticles;
 use super::cg;
 use super::dfsph::{self, Bounds, Solve, SolveResult};
+use super::energy_bound::EnergyBound;
 use super::fluid::FluidParticles;
 use super::forces;
 use super::hooks::{StepContext, StepHook};
 use super::iisph;
 use super::kernel::CubicSpline;
+use super::lost::{self, LostParticles};
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order_and_codes, CellGrid, NeighborLists};
-use super::open::OpenBoundaries;
+use super::open::{Exchange, OpenBoundaries};
 use super::operators::{self, Operators, WallField};
 use super::pair_cache::{Densities, PairCache};
-use super::params::{PressureSolverKind, SphParams};
+use super::params::{DomainSide, PressureSolverKind, SphParams};
+use super::ramp::Ramp;
 use crate::geometry::RigidBody;
 use crate::stepping::{towards_end, StepLimits};
-use crate::{Real, Vec3};
+use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -39,14 +42,44 @@ pub enum Instability {
         particle: usize,
     },
     #[error(
-        "unstable at t = {time:.6} s (step {step}): fluid particle {particle} left the domain at \
-         ({:.4}, {:.4}, {:.4}) m", position.x, position.y, position.z
+        "unstable at t = {time:.6} s (step {step}): fluid particle {particle} went through a \
+         wall: it is inside a solid beyond the domain's {} side, at ({:.4}, {:.4}, {:.4}) m",
+        side.name(), position.x, position.y, position.z
     )]
     Escaped {
         time: Real,
         step: u64,
         particle: usize,
         position: Vec3,
+        side: DomainSide,
+    },
+    #[error(
+        "unstable at t = {time:.6} s (step {step}): {lost} fluid particles have left the domain \
+         through open sides ({sides}; the last at ({:.4}, {:.4}, {:.4}) m), more than \
+         fluid.lost_fraction = {fraction} of the {particles} left",
+        last.x, last.y, last.z
+    )]
+    Lost {
+        time: Real,
+        step: u64,
+        lost: u64,
+        /// The count through each side, in words.
+        sides: String,
+        last: Vec3,
+        fraction: Real,
+        particles: usize,
+    },
+    #[error(
+        "unstable at t = {time:.6} s (step {step}): the fluid's mean kinetic energy, {energy:.4} \
+         J/kg, is above {bound:.4} J/kg, a hundred times what its fastest source and a fall \
+         across the domain could give (fastest particle {fastest:.3} m/s)"
+    )]
+    Energy {
+        time: Real,
+        step: u64,
+        energy: Real,
+        bound: Real,
+        fastest: Real,
     },
     #[error(
         "unstable at t = {time:.6} s (step {step}): the CFL condition needs dt = {needed:.3e} s, \
@@ -77,6 +110,8 @@ pub struct StepStats {
     pub open_seconds: Real,
     /// Wall-clock seconds of the whole step.
     pub step_seconds: Real,
+    /// Fluid particles lost through open sides of the domain so far, this step's included.
+    pub lost: u64,
 }
 
 /// The SPH fluid, its boundary samples, and the settings that drive it.
@@ -116,6 +151,12 @@ pub struct SphSolver {
     /// Per body, the viscosity Eq. 4 applies over its samples: its `wall_viscosity` times
     /// [`super::boundary::no_slip_gain`]; empty when every wall is free-slip.
     wall_viscosity: Vec<Real>,
+    /// The smooth start (none when `params.ramp` is 0).
+    ramp: Ramp,
+    /// The particles that left through open sides.
+    lost: LostParticles,
+    /// The energy stop.
+    energy: EnergyBound,
 }
 
 impl SphSolver {
@@ -148,6 +189,14 @@ impl SphSolver {
             &kernel,
             keep,
         );
+        let v0 = params
+            .blocks
+            .first()
+            .map_or(Vec3::zeros(), |b| Vec3::from(b.velocity));
+        let ramp = Ramp::new(params.ramp, v0);
+        if params.ramp > 0.0 {
+            fluid.v.fill(Vec3::zeros());
+        }
         let mut open = OpenBoundaries::new(
             &params.inflows,
             &params.outflows,
@@ -155,7 +204,16 @@ impl SphSolver {
             spacing,
             keep,
         );
-        open.prime(&mut fluid);
+        open.prime(&mut fluid, ramp.factor(0.0));
+        let source = params
+            .blocks
+            .iter()
+            .map(|b| b.velocity)
+            .chain(params.inflows.iter().map(|i| i.velocity))
+            .map(|v| Vec3::from(v).norm())
+            .chain(bodies.iter().map(RigidBody::fastest_speed))
+            .fold(0.0, Real::max);
+        let energy = EnergyBound::new(source, params.gravity, params.domain);
         let boundary = BoundaryParticles::sample(&bodies, params.container, spacing, &kernel, 0.0);
         // One value per body, so the step bound, the plan and the forces read the same walls:
         // a body `params.wall_viscosity` does not cover takes `viscosity.boundary`, as a
@@ -195,6 +253,9 @@ impl SphSolver {
             ran: Vec::new(),
             open,
             wall_viscosity,
+            ramp,
+            lost: LostParticles::default(),
+            energy,
         };
         me.update_neighborhoods();
         me
@@ -342,6 +403,13 @@ impl SphSolver {
         };
         let step_start = Instant::now();
         let mut stats = StepStats::default();
+        let energy_bound = self.energy.bound(|| max_speed(&self.fluid.v));
+        // r(t) and r(t + dt): the inflow buffers' share of their velocity at both ends.
+        let (r0, r1) = (
+            self.ramp.factor(self.time),
+            self.ramp.factor(self.time + dt),
+        );
+        let ramp = self.ramp.increment(self.time, dt);
         let ran = &mut self.ran;
         ran.clear();
         let FluidParticles {
@@ -399,7 +467,7 @@ impl SphSolver {
         };
         stats.dt = dt;
         let start = Instant::now();
-        self.open.impose(x, v);
+        self.open.impose(x, v, r0);
         stats.open_seconds = start.elapsed().as_secs_f64();
         // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
         // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
@@ -446,6 +514,9 @@ impl SphSolver {
         v.par_iter_mut()
             .zip(accel.par_iter())
             .for_each(|(v, a)| *v += dt * a);
+        if let Some(dv) = ramp {
+            v.par_iter_mut().for_each(|v| *v += dv);
+        }
         if viscosity.xsph > 0.0 {
             forces::xsph(&nb, density, rho0, v, viscosity.xsph);
         }
@@ -480,7 +551,7 @@ impl SphSolver {
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
         let start = Instant::now();
-        self.open.impose(x, v);
+        self.open.impose(x, v, r1);
         stats.open_seconds += start.elapsed().as_secs_f64();
         // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2):
         // the divergence solve's and the density solve's, both pressure impulses of this step.
@@ -493,21 +564,62 @@ impl SphSolver {
             .zip(v.par_iter())
             .for_each(|(x, v)| *x += dt * v);
         ran.push("advect");
-        if !self.open.is_empty() {
-            let start = Instant::now();
-            if let Some(change) = self.open.exchange(&mut self.fluid, dt) {
-                for hook in &mut self.hooks {
-                    hook.resize(&change.keep, change.added);
-                }
-            }
-            stats.open_seconds += start.elapsed().as_secs_f64();
-            ran.push("open boundaries");
-        }
-        stats.step_seconds = step_start.elapsed().as_secs_f64();
         self.time += dt;
         self.step += 1;
-        self.check()?;
+        let start = Instant::now();
+        let mut change = self.open.exchange(x, dt, r1);
+        if !self.open.is_empty() {
+            ran.push("open boundaries");
+        }
+        let left = self.leaving(change.as_ref().map(|c| &c.keep[..]))?;
+        if !left.is_empty() {
+            let n = self.fluid.len();
+            let change = change.get_or_insert_with(|| Exchange {
+                keep: vec![true; n],
+                added: Vec::new(),
+            });
+            for &(i, side) in &left {
+                self.lose(i, side);
+                change.keep[i] = false;
+            }
+        }
+        if let Some(change) = change {
+            self.fluid.exchange(&change.keep, &change.added);
+            for hook in &mut self.hooks {
+                hook.resize(&change.keep, change.added.len());
+            }
+        }
+        stats.open_seconds += start.elapsed().as_secs_f64();
+        stats.step_seconds = step_start.elapsed().as_secs_f64();
+        stats.lost = self.lost.total();
+        self.check_losses()?;
+        self.check_energy(energy_bound)?;
         Ok(stats)
+    }
+
+    /// Fluid particles lost through open sides of the domain so far.
+    pub fn lost_particles(&self) -> u64 {
+        self.lost.total()
+    }
+
+    /// Counts particle `i`, lost through `side`; the first loss of a run is a warning.
+    fn lose(&mut self, i: usize, side: DomainSide) {
+        let x = self.fluid.x[i];
+        if self.lost.total() == 0 {
+            tracing::warn!(
+                "t = {:.4} s: a fluid particle left the domain through its open {} side at \
+                 ({:.4}, {:.4}, {:.4}) m; lost particles are removed and counted \
+                 (metrics.csv: lost_particles), and the run stops once they exceed \
+                 fluid.lost_fraction = {} of the fluid",
+                self.time,
+                side.name(),
+                x.x,
+                x.y,
+                x.z,
+                self.params.lost_fraction
+            );
+        }
+        self.lost.add(side, x);
     }
 
     /// One line on the fluid as built, for `eddy run --plan`.
@@ -573,6 +685,9 @@ impl SphSolver {
         }
         if v.xsph > 0.0 {
             forces += &format!(", XSPH {}", v.xsph);
+        }
+        if let Some(ramp) = self.ramp.describe() {
+            forces += &format!("; {ramp}");
         }
         out.push(("forces", forces));
         out.push((
@@ -660,45 +775,91 @@ impl SphSolver {
         )
     }
 
-    /// Stops the run on a non-finite state or a particle outside the domain by more than the
-    /// wall layer's depth (a container flush with the domain lets particles touch its walls,
-    /// and a particle behind the wall samples has escaped).
-    fn check(&self) -> Result<(), Instability> {
+    /// After the positions moved, of the particles the open boundaries keep (`keep`; all
+    /// without it): the run stops on a non-finite state and on a particle beyond the domain
+    /// that lies inside a solid, having gone through a wall ([`super::lost`]); the others
+    /// beyond it are returned, each with its side, for removal. Beyond means by more than the
+    /// wall layer's depth: a container flush with the domain lets particles touch its walls.
+    fn leaving(&self, keep: Option<&[bool]>) -> Result<Vec<(usize, DomainSide)>, Instability> {
         let margin = super::boundary::MIRROR_DEPTH * self.spacing;
-        let (lo, hi) = self.params.domain;
-        let (lo, hi) = (lo.add_scalar(-margin), hi.add_scalar(margin));
-        let bad = self
-            .fluid
-            .x
-            .par_iter()
-            .zip(self.fluid.v.par_iter())
-            .position_any(|(x, v)| {
-                !(x.iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite()))
-                    || (0..3).any(|a| x[a] < lo[a] || x[a] > hi[a])
-            });
-        let Some(i) = bad else { return Ok(()) };
-        let (x, v) = (self.fluid.x[i], self.fluid.v[i]);
-        Err(if !x.iter().all(|c| c.is_finite()) {
-            Instability::NotFinite {
-                time: self.time,
-                step: self.step,
-                what: "position is not finite",
-                particle: i,
-            }
-        } else if !v.iter().all(|c| c.is_finite()) {
-            Instability::NotFinite {
-                time: self.time,
-                step: self.step,
-                what: "velocity is not finite",
-                particle: i,
-            }
-        } else {
-            Instability::Escaped {
-                time: self.time,
-                step: self.step,
-                particle: i,
-                position: x,
-            }
+        let domain = self.params.domain;
+        let finite = |v: &Vec3| v.iter().all(|c| c.is_finite());
+        let (x, v) = (&self.fluid.x, &self.fluid.v);
+        let flagged: Vec<usize> = (0..x.len())
+            .into_par_iter()
+            .filter(|&i| {
+                keep.is_none_or(|k| k[i])
+                    && (!finite(&x[i])
+                        || !finite(&v[i])
+                        || lost::beyond(&x[i], domain, margin).is_some())
+            })
+            .collect();
+        let (time, step) = (self.time, self.step);
+        let not_finite = |what, particle| Instability::NotFinite {
+            time,
+            step,
+            what,
+            particle,
+        };
+        if let Some(&i) = flagged.iter().find(|&&i| !finite(&x[i])) {
+            return Err(not_finite("position is not finite", i));
+        }
+        if let Some(&i) = flagged.iter().find(|&&i| !finite(&v[i])) {
+            return Err(not_finite("velocity is not finite", i));
+        }
+        flagged
+            .into_iter()
+            .map(|i| {
+                let side = lost::beyond(&x[i], domain, margin).expect("flagged outside");
+                if self.wall_distance(&Point3::from(x[i])) < 0.0 {
+                    return Err(Instability::Escaped {
+                        time,
+                        step,
+                        particle: i,
+                        position: x[i],
+                        side,
+                    });
+                }
+                Ok((i, side))
+            })
+            .collect()
+    }
+
+    /// Stops the run once the lost particles exceed `lost_fraction` of the fluid left.
+    fn check_losses(&self) -> Result<(), Instability> {
+        let (lost, particles) = (self.lost.total(), self.fluid.len());
+        let fraction = self.params.lost_fraction;
+        if lost as Real <= fraction * particles as Real {
+            return Ok(());
+        }
+        Err(Instability::Lost {
+            time: self.time,
+            step: self.step,
+            lost,
+            sides: self.lost.by_side(),
+            last: self.lost.last().unwrap_or_default(),
+            fraction,
+            particles,
+        })
+    }
+
+    /// Stops the run when the fluid's mean kinetic energy per unit mass exceeds `bound`
+    /// ([`super::energy_bound`]).
+    fn check_energy(&self, bound: Real) -> Result<(), Instability> {
+        let v = &self.fluid.v;
+        if v.is_empty() {
+            return Ok(());
+        }
+        let energy = crate::parallel::sum_by(v, |v| v.norm_squared()) / (2.0 * v.len() as Real);
+        if !EnergyBound::exceeded(bound, energy) {
+            return Ok(());
+        }
+        Err(Instability::Energy {
+            time: self.time,
+            step: self.step,
+            energy,
+            bound,
+            fastest: max_speed(v),
         })
     }
 
@@ -746,6 +907,11 @@ fn step_size(
         return Err((needed, speed));
     }
     Ok(needed.min(dt_max))
+}
+
+/// The largest |v|.
+fn max_speed(v: &[Vec3]) -> Real {
+    v.par_iter().map(|v| v.norm()).reduce(|| 0.0, Real::max)
 }
 
 /// Gravity plus viscosity, per fluid particle.

@@ -14,8 +14,8 @@
 //! cells' (`crate::metrics::stations`): each cell's own temporal fluctuation, so a fine run's
 //! small-scale fluctuation counts as fluctuation, not the mean shear across a bin; on the grid
 //! the cells along the periodic span are pooled first, as one ensemble. On
-//! particles every run's lattice has the coarse spacing, so the reference is filtered as the
-//! coarse runs are. The errors are root-mean-square differences from the reference over the
+//! particles every run's lattice has the same cells (two coarse spacings), so the reference is
+//! filtered as the coarse runs are. The errors are root-mean-square differences from the reference over the
 //! stations' bins: `U` in units of |U_0|, `k` in units of |U_0|^2.
 
 use std::path::{Path, PathBuf};
@@ -25,7 +25,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::abl_particles::{default_stations, Bins};
 use crate::io::plot::{error_figure, CurvePanel, ErrorPoint};
-use crate::io::{CsvSeries, IoError};
+use crate::io::{AttrValue, CsvSeries, IoError};
+use crate::pipeline::outputs::write_statistics;
 use crate::pipeline::{Pipeline, RunError};
 use crate::scene::{self, Axis, Scene, Station, Statistics};
 use crate::Real;
@@ -58,6 +59,9 @@ pub struct AblBenchOptions {
     /// fluctuates, `grid.inflow_turbulence`) are repeated with this many scene seeds (the
     /// scene's, then the next ones), one row each, and summarised by label.
     pub seeds: u64,
+    /// Only these runs (labels none, random, abl, reference); every one when empty. A
+    /// reference run alone is how one is stored for later `reference` comparisons.
+    pub runs: Vec<String>,
 }
 
 /// One run of the table.
@@ -84,8 +88,18 @@ pub struct AblBenchRow {
 }
 
 /// Per station, per coarse bin (y on a grid, z on particles): the time-averaged streamwise
-/// velocity U and k.
-pub type Profiles = Vec<Vec<(Real, Real)>>;
+/// velocity U and k with their 95 % half-widths (batch means; NaN for a stored reference
+/// without them).
+pub type Profiles = Vec<Vec<ProfileBin>>;
+
+/// One bin of a profile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileBin {
+    pub u: Real,
+    pub k: Real,
+    pub u_ci: Real,
+    pub k_ci: Real,
+}
 
 /// The coarse bins of a comparison.
 #[derive(Debug, Clone, Copy)]
@@ -161,7 +175,7 @@ fn measure(
     stations: &[Real],
     coarse: Coarse,
     from: Real,
-) -> Result<(AblBenchRow, Profiles), RunError> {
+) -> Result<(AblBenchRow, Profiles, Pipeline), RunError> {
     let mut scene = scene.clone();
     scene.statistics = Some(coarse.statistics(&scene, stations, from));
     let mut p = Pipeline::build(&scene)?;
@@ -214,16 +228,20 @@ fn measure(
         .stations
         .iter()
         .map(|s| {
-            s.profile(&stats.cells)
-                .iter()
-                .map(|b| (b.mean[0], b.k))
-                .collect()
+            let bins = s.profile(&stats.cells).into_iter();
+            bins.map(|b| ProfileBin {
+                u: b.mean[0],
+                k: b.k,
+                u_ci: b.mean_ci[0],
+                k_ci: b.k_ci,
+            })
+            .collect()
         })
         .collect();
     let bins: Vec<Real> = profiles
         .iter()
         .flatten()
-        .map(|b| b.1)
+        .map(|b| b.k)
         .filter(|k| k.is_finite())
         .collect();
     let mean_k = bins.iter().sum::<Real>() / bins.len() as Real;
@@ -242,6 +260,7 @@ fn measure(
             k_error: Real::NAN,
         },
         profiles,
+        p,
     ))
 }
 
@@ -370,33 +389,47 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
         .as_ref()
         .map(|path| read_profiles(path, stations.len(), coarse.bins()))
         .transpose()?;
-    let mut rows = Vec::new();
-    let mut profiles = Vec::new();
-    for (label, scene) in &configs {
-        let (row, prof) = measure(label, scene, &stations, coarse, from)?;
-        rows.push(row);
-        profiles.push(prof);
-    }
     if let Some(dir) = &options.profiles {
         std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, "creating", e))?;
-        for (row, prof) in rows.iter().zip(&profiles) {
+    }
+    let mut rows = Vec::new();
+    let mut profiles = Vec::new();
+    let chosen = |label: &str| options.runs.is_empty() || options.runs.iter().any(|r| r == label);
+    for (label, scene) in configs.iter().filter(|(l, _)| chosen(l)) {
+        let (row, prof, p) = measure(label, scene, &stations, coarse, from)?;
+        // Each run's profiles and statistics are written as it ends: a long comparison keeps
+        // what it has measured.
+        if let Some(dir) = &options.profiles {
             let repeated = match row.label {
                 "random" | "abl" => true,
                 "none" => gusty,
                 _ => false,
             };
             let name = if repeated && options.seeds > 1 {
-                format!("{}_seed{}.csv", row.label, row.seed)
+                format!("{}_seed{}", row.label, row.seed)
             } else {
-                format!("{}.csv", row.label)
+                row.label.to_owned()
             };
-            write_profiles(&dir.join(name), prof, &stations, coarse)?;
+            write_profiles(&dir.join(format!("{name}.csv")), &prof, &stations, coarse)?;
+            let m = &p.sim.statistics[0];
+            let attrs = [
+                ("scene", AttrValue::from(scene.name.as_str())),
+                ("seed", AttrValue::Int(scene.seed as i64)),
+                ("run", AttrValue::from(row.label)),
+            ];
+            let at = (p.sim.steps(), p.sim.time());
+            let h5 = dir.join(format!("{name}_statistics.h5"));
+            write_statistics(&h5, None, &m.stats, m.kind, at, &attrs, 6)?;
         }
+        rows.push(row);
+        profiles.push(prof);
     }
     let reference = match stored {
         Some(r) => Some(r),
-        None if !options.skip_reference => profiles.last().cloned(),
-        None => None,
+        None => rows
+            .iter()
+            .position(|r| r.label == "reference")
+            .map(|i| profiles[i].clone()),
     };
     if let Some(reference) = &reference {
         let u0 = base.turbulence_u0().unwrap_or(1.0);
@@ -406,9 +439,9 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
                 .iter()
                 .flatten()
                 .zip(reference.iter().flatten())
-                .filter(|(a, b)| a.0.is_finite() && b.0.is_finite())
+                .filter(|(a, b)| a.u.is_finite() && b.u.is_finite())
                 .collect();
-            let rms = |f: &dyn Fn(&(Real, Real)) -> Real| {
+            let rms = |f: &dyn Fn(&ProfileBin) -> Real| {
                 (pairs
                     .iter()
                     .map(|(a, b)| (f(a) - f(b)).powi(2))
@@ -416,8 +449,8 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
                     / pairs.len() as Real)
                     .sqrt()
             };
-            row.u_error = rms(&|b| b.0) / u0;
-            row.k_error = rms(&|b| b.1) / (u0 * u0);
+            row.u_error = rms(&|b| b.u) / u0;
+            row.k_error = rms(&|b| b.k) / (u0 * u0);
         }
     }
     if let Some(png) = &options.plot {
@@ -434,8 +467,8 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
             let curve = prof[middle]
                 .iter()
                 .enumerate()
-                .filter(|(_, &(u, _))| u.is_finite())
-                .map(|(b, &(u, _))| (coarse.centre(b), u))
+                .filter(|(_, bin)| bin.u.is_finite())
+                .map(|(b, bin)| (coarse.centre(b), bin.u))
                 .collect();
             (label.to_owned(), curve)
         };
@@ -468,30 +501,26 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     Ok(rows)
 }
 
-/// Writes `profiles` as CSV rows `station, y, U, k` (bin centres, m: in y on a grid, in z on
-/// particles, the column keeping its name).
+/// Writes `profiles` as CSV rows `station, y, U, k, U_ci, k_ci` (bin centres, m: in y on a
+/// grid, in z on particles, the column keeping its name; the 95 % half-widths of U and k).
 fn write_profiles(
     path: &Path,
     profiles: &Profiles,
     stations: &[Real],
     coarse: Coarse,
 ) -> Result<(), IoError> {
-    let columns = ["station", "y", "U", "k"].map(String::from);
+    let columns = ["station", "y", "U", "k", "U_ci", "k_ci"].map(String::from);
     let mut csv = CsvSeries::create(path, &columns)?;
     for (x, prof) in stations.iter().zip(profiles) {
-        for (b, (u, k)) in prof.iter().enumerate() {
-            csv.row(&[*x, coarse.centre(b), *u, *k])?;
+        for (b, bin) in prof.iter().enumerate() {
+            csv.row(&[*x, coarse.centre(b), bin.u, bin.k, bin.u_ci, bin.k_ci])?;
         }
     }
     Ok(())
 }
 
 /// Reads profiles written by [`write_profiles`], checking they have `stations` x `bins` rows.
-fn read_profiles(
-    path: &Path,
-    stations: usize,
-    bins: usize,
-) -> Result<Vec<Vec<(Real, Real)>>, IoError> {
+fn read_profiles(path: &Path, stations: usize, bins: usize) -> Result<Profiles, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, "reading", e))?;
     let rows: Vec<Vec<Real>> = text
         .lines()
@@ -504,19 +533,25 @@ fn read_profiles(
         })
         .collect::<Result<_, _>>()
         .map_err(|e| IoError::invalid(path, format!("not a profile table: {e}")))?;
-    if rows.len() != stations * bins || rows.iter().any(|r| r.len() != 4) {
+    if rows.len() != stations * bins || rows.iter().any(|r| r.len() != 4 && r.len() != 6) {
         return Err(IoError::invalid(
             path,
             format!(
                 "{} rows; this comparison has {stations} stations x {bins} bins of 4 columns \
-                 (station, y, U, k)",
+                 (station, y, U, k) or 6 (and U_ci, k_ci)",
                 rows.len()
             ),
         ));
     }
+    let bin = |r: &Vec<Real>| ProfileBin {
+        u: r[2],
+        k: r[3],
+        u_ci: r.get(4).copied().unwrap_or(Real::NAN),
+        k_ci: r.get(5).copied().unwrap_or(Real::NAN),
+    };
     Ok(rows
         .chunks(bins)
-        .map(|c| c.iter().map(|r| (r[2], r[3])).collect())
+        .map(|c| c.iter().map(bin).collect())
         .collect())
 }
 

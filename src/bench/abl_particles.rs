@@ -1,7 +1,9 @@
 //! Figure 8's protocol on SPH particles (see [`super::abl`]): where a stream past obstacles in
-//! a channel is measured. Each station is a slab one coarse spacing thick across the stream
-//! (x), cut into bins one coarse spacing wide across the channel (z) and taking the whole depth
-//! (y), on the statistics' lattice of the coarse spacing.
+//! a channel is measured. Each station is a slab two coarse spacings thick across the stream
+//! (x), cut into bins two coarse spacings wide across the channel (z) and taking the whole
+//! depth (y), on the statistics' lattice of that size: each bin's mean then averages about
+//! eight of the coarse run's particles (a bin one spacing wide holds about one, whose own
+//! noise would count as turbulence).
 
 use crate::geometry::RigidBody;
 use crate::scene::build::abl_settings;
@@ -17,7 +19,7 @@ pub struct Bins {
 }
 
 impl Bins {
-    /// One coarse spacing wide, over the z extent of the scene's fluid blocks.
+    /// Two coarse spacings wide, over the z extent of the scene's fluid blocks.
     pub fn across(scene: &Scene) -> Option<Self> {
         let fluid = scene.fluid.as_ref()?;
         let (lo, hi) = fluid
@@ -26,7 +28,7 @@ impl Bins {
             .fold((Real::MAX, Real::MIN), |(lo, hi), b| {
                 (lo.min(b.min[2]), hi.max(b.max[2]))
             });
-        let count = ((hi - lo) / fluid.spacing).round().max(1.0) as usize;
+        let count = ((hi - lo) / (2.0 * fluid.spacing)).round().max(1.0) as usize;
         Some(Self {
             origin: lo,
             size: (hi - lo) / count as Real,

@@ -128,7 +128,8 @@ pub struct AblBenchArgs {
     /// `--profiles`) instead of running the reference again.
     #[arg(long, value_name = "CSV")]
     pub reference: Option<PathBuf>,
-    /// Write each run's profiles (station, y, U, k) into this folder as LABEL.csv.
+    /// Write each run's profiles (station, y, U, k, U_ci, k_ci) into this folder as LABEL.csv,
+    /// and its statistics as LABEL_statistics.h5, as each run ends.
     #[arg(long, value_name = "DIR")]
     pub profiles: Option<PathBuf>,
     /// Draw the errors against wall time and the middle station's U profiles into this PNG.
@@ -138,6 +139,10 @@ pub struct AblBenchArgs {
     /// many scene seeds (at least 1).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub seeds: u64,
+    /// Only these runs, e.g. --runs reference to store a reference with --profiles [default:
+    /// every run].
+    #[arg(long, value_delimiter = ',', value_parser = ["none", "random", "abl", "reference"])]
+    pub runs: Vec<String>,
 }
 
 impl From<AblBenchArgs> for AblBenchOptions {
@@ -152,6 +157,7 @@ impl From<AblBenchArgs> for AblBenchOptions {
             profiles: a.profiles,
             plot: a.plot,
             seeds: a.seeds,
+            runs: a.runs,
         }
     }
 }

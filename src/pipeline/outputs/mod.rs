@@ -21,7 +21,7 @@ pub use files::{
 };
 pub use frame::Frame;
 pub use profiles::LineProbe;
-pub use statistics::{STATISTICS_FORMAT, STATISTICS_FORMAT_VERSION};
+pub use statistics::{write_statistics, STATISTICS_FORMAT, STATISTICS_FORMAT_VERSION};
 
 use super::{RunError, Simulation};
 use crate::io::{AttrValue, IoError, VtkOptions};

@@ -77,53 +77,68 @@ impl StatisticsOutput {
         stats: &FlowStatistics,
         sim: &Simulation,
     ) -> Result<(), IoError> {
-        let Some((from, to)) = stats.span else {
-            return Ok(());
-        };
-        let f = stats.fields();
-        let frame = GridFrame {
-            step: sim.steps(),
-            time: sim.time(),
-            origin: stats.lattice.origin,
-            spacing: stats.lattice.spacing,
-            dims: stats.lattice.dims,
-            fields: vec![
-                GridField::vector("mean_velocity", views(&f.mean_velocity)),
-                GridField::tensor("reynolds_stress", views(&f.reynolds_stress)),
-                GridField::scalar("k", f.k.view()),
-                GridField::vector("mean_vorticity", views(&f.mean_vorticity)),
-                GridField::scalar("mean_enstrophy", f.mean_enstrophy.view()),
-                GridField::scalar("samples", f.samples.view()),
-            ],
-        };
-        let medium = match kind {
-            Kind::Grid => "grid",
-            Kind::Particles => "particles",
-        };
-        let mut attrs = vec![
-            ("format", AttrValue::from(STATISTICS_FORMAT)),
-            ("format_version", AttrValue::Int(STATISTICS_FORMAT_VERSION)),
-            ("medium", AttrValue::from(medium)),
-            ("time_from", AttrValue::Real(from)),
-            ("time_to", AttrValue::Real(to)),
-            ("sample_count", AttrValue::Int(stats.steps as i64)),
-        ];
-        attrs.extend(self.attrs.iter().cloned());
-        write_grid_file(
-            &self.file(kind, "statistics.h5"),
-            &frame,
-            &attrs,
-            self.level,
-        )?;
-        if let Some(options) = self.vtk {
-            write_grid_vtk(&self.file(kind, "statistics.vti"), &frame, options)?;
-        }
+        let h5 = self.file(kind, "statistics.h5");
+        let vti = self.file(kind, "statistics.vti");
+        let vtk = self.vtk.map(|o| (vti.as_path(), o));
+        let at = (sim.steps(), sim.time());
+        write_statistics(&h5, vtk, stats, kind, at, &self.attrs, self.level)?;
         for station in &stats.stations {
             let path = self.file(kind, &format!("station_{}.csv", station.spec.name));
             write_profile(&path, station, &stats.cells)?;
         }
         Ok(())
     }
+}
+
+/// Writes `stats` (of `medium`, at step and time `at`) as the HDF5 file `h5` with its XDMF
+/// (and with `vtk` as that `.vti`), with `attrs` among the root attributes; nothing before
+/// the first sample.
+pub fn write_statistics(
+    h5: &Path,
+    vtk: Option<(&Path, VtkOptions)>,
+    stats: &FlowStatistics,
+    medium: Kind,
+    (step, time): (u64, Real),
+    attrs: &[(&'static str, AttrValue)],
+    level: u8,
+) -> Result<(), IoError> {
+    let Some((from, to)) = stats.span else {
+        return Ok(());
+    };
+    let f = stats.fields();
+    let frame = GridFrame {
+        step,
+        time,
+        origin: stats.lattice.origin,
+        spacing: stats.lattice.spacing,
+        dims: stats.lattice.dims,
+        fields: vec![
+            GridField::vector("mean_velocity", views(&f.mean_velocity)),
+            GridField::tensor("reynolds_stress", views(&f.reynolds_stress)),
+            GridField::scalar("k", f.k.view()),
+            GridField::vector("mean_vorticity", views(&f.mean_vorticity)),
+            GridField::scalar("mean_enstrophy", f.mean_enstrophy.view()),
+            GridField::scalar("samples", f.samples.view()),
+        ],
+    };
+    let medium = match medium {
+        Kind::Grid => "grid",
+        Kind::Particles => "particles",
+    };
+    let mut all = vec![
+        ("format", AttrValue::from(STATISTICS_FORMAT)),
+        ("format_version", AttrValue::Int(STATISTICS_FORMAT_VERSION)),
+        ("medium", AttrValue::from(medium)),
+        ("time_from", AttrValue::Real(from)),
+        ("time_to", AttrValue::Real(to)),
+        ("sample_count", AttrValue::Int(stats.steps as i64)),
+    ];
+    all.extend(attrs.iter().cloned());
+    write_grid_file(h5, &frame, &all, level)?;
+    if let Some((path, options)) = vtk {
+        write_grid_vtk(path, &frame, options)?;
+    }
+    Ok(())
 }
 
 /// A station's profile as CSV, rewritten whole: per bin its centre along the axis, U, k, their

@@ -1,6 +1,6 @@
 //! eddy: wall-induced turbulence on MAC grids and SPH particles.
 //!
-//! The crate is laid out as `../shared/DESIGN.md` describes; every module, by layer:
+//! The crate is laid out as ARCHITECTURE.md maps it; every module, by layer:
 //!
 //! - [`pipeline`]: a scene as a [`pipeline::Simulation`] and its stages, the plan printed from
 //!   them, and the one driver loop.
@@ -32,7 +32,7 @@ pub mod sph;
 pub mod stepping;
 pub mod vortex;
 
-/// The one floating-point type of eddy (f64 throughout, see DESIGN.md "Conventions").
+/// The one floating-point type of eddy (f64 throughout, see ARCHITECTURE.md, "Conventions").
 pub type Real = f64;
 /// A 3D vector of [`Real`].
 pub type Vec3 = nalgebra::Vector3<Real>;

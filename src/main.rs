@@ -123,8 +123,8 @@ fn main() -> ExitCode {
     let command = Cli::parse().command;
     // The command runs on a worker of rayon's pool, not on the main thread: a parallel loop
     // started from outside the pool hands its work over and sleeps on a lock until it is done,
-    // a wake-up per loop that a small scene pays for every loop of its step (the wind-over-tank
-    // grid alone: 2.3-2.7 -> 1.3-1.9 ms a step, docs/src/benchmarks.md). From a worker the loop starts in place.
+    // a wake-up per loop that a small scene pays for every loop of its step (measured in the
+    // book's benchmarks chapter). From a worker the loop starts in place.
     // Results are unchanged: every sum is in a fixed order (`parallel.rs`).
     match rayon::scope(|_| run(command)) {
         Ok(()) => ExitCode::SUCCESS,

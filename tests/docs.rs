@@ -101,3 +101,30 @@ fn the_scene_reference_is_what_the_code_prints() {
          `cargo run --release -- scene-keys --markdown > docs/src/scene-reference.md`"
     );
 }
+
+/// The repository stands alone: no tracked text file names a path outside it (the design and
+/// the papers' corrections the code relies on are in ARCHITECTURE.md and the book).
+#[test]
+fn no_file_cites_a_path_outside_the_repository() {
+    let listed = std::process::Command::new("git")
+        .args(["ls-files"])
+        .current_dir(root())
+        .output();
+    let Some(listed) = listed.ok().filter(|o| o.status.success()) else {
+        eprintln!("not a git checkout: the check is skipped");
+        return;
+    };
+    let outside = ["../shared", "shared/DESIGN", "PAPER-NOTES"];
+    let mut found = Vec::new();
+    for file in String::from_utf8_lossy(&listed.stdout).lines() {
+        let Ok(text) = std::fs::read_to_string(root().join(file)) else {
+            continue;
+        };
+        for (n, line) in text.lines().enumerate() {
+            if outside.iter().any(|o| line.contains(o)) && !file.ends_with("tests/docs.rs") {
+                found.push(format!("{file}:{}: {line}", n + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}

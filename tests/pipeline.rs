@@ -1,5 +1,5 @@
 //! The one pipeline: the plan is what runs, a scene with a grid and an SPH fluid steps both on
-//! one clock, and the layering rules of DESIGN.md hold in the source tree.
+//! one clock, and the layering rules of ARCHITECTURE.md hold in the source tree.
 
 use eddy::pipeline::{run, Pipeline, RunOptions};
 use eddy::scene;
@@ -195,7 +195,7 @@ fn frames_land_on_the_output_interval() {
     assert!(dts.iter().all(|&dt| dt >= 0.0015 - 1e-15), "{dts:?}");
 }
 
-/// The layering rules of DESIGN.md, all in this table: per source folder, the paths its code
+/// The layering rules of ARCHITECTURE.md ("Layering"), all in this table: per source folder, the paths its code
 /// may not name (comments may point anywhere). No part names the scene; the two solvers do not
 /// name each other; neither the vortex layer nor the boundary layer's seeding and lookup name
 /// a solver; the SPH solver names neither the refinements on top of it nor the metrics that
@@ -218,7 +218,7 @@ const BANNED: [(&str, &[&str]); 7] = [
     ("vortex", &["crate::scene", "crate::sph", "crate::grid"]),
 ];
 
-/// The parts of `sph` that `refine` may reach (DESIGN.md: "only through its operators and the
+/// The parts of `sph` that `refine` may reach (ARCHITECTURE.md: "only through its operators and the
 /// step hooks"); any other `crate::sph` path in `refine` is a crossing.
 const REFINE_REACHES: [&str; 2] = ["crate::sph::operators", "crate::sph::hooks"];
 

@@ -36,7 +36,7 @@ pub enum Seeding {
 #[serde(deny_unknown_fields)]
 pub struct TurbulenceParams {
     /// c_p of Eq. 8, 1/s: `p_T = 2 c_p dt (l_m |omega_ABL| / |U_0|)^2` is a probability per
-    /// sample and step while `dt` carries seconds, so c_p carries 1/s (PAPER-NOTES.md). 0 seeds
+    /// sample and step while `dt` carries seconds, so c_p carries 1/s (docs/src/paper-notes.md, "Eq. 8"). 0 seeds
     /// nothing; the paper uses about 1 to 4.
     #[serde(default = "d_c_p")]
     pub c_p: Real,

@@ -64,7 +64,7 @@ impl SeedSamples {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeedingParams {
     /// c_p of Eq. 8, 1/s: p_T is a probability per sample and step while dt carries seconds
-    /// (PAPER-NOTES.md).
+    /// (docs/src/paper-notes.md, "Eq. 8").
     pub c_p: Real,
     /// |U_0| of Eq. 8, m/s, > 0.
     pub u0: Real,

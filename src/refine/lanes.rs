@@ -2,8 +2,8 @@
 //!
 //! A particle's 3-vector and one scalar fill one 16-byte load, and a pair's cross or outer
 //! product becomes a few four-lane operations. The lanes run across a vector's components, not
-//! across neighbours: eight neighbours at once need hardware gathers, which measured four
-//! times slower than this on Zen 4. Where a pair's work is one scalar of the distance (VRSPH's
+//! across neighbours: eight neighbours at once need hardware gathers, which measured slower
+//! (the book's benchmarks chapter, "Measurements behind design choices"). Where a pair's work is one scalar of the distance (VRSPH's
 //! stream function), four neighbours' loads are transposed into rows instead
 //! ([`F4::transpose3`]).
 

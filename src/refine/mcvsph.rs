@@ -16,7 +16,7 @@
 //!   measured on the very field the correction is added to.
 //! - The loss smoothed onto the vortex particles (Eq. 28) and the Monte Carlo Biot–Savart
 //!   correction (Eq. 26 with P_k = 1 / N_f, Eq. 27), added to every fluid velocity (Eq. 29).
-//!   Each term carries its own particle's volume c V_k (PAPER-NOTES.md on Eq. 26), so the
+//!   Each term carries its own particle's volume c V_k (docs/src/paper-notes.md, "Eq. 26"), so the
 //!   prefactor is c N_f / N.
 //!
 //! **Vortex particles.** A seeded random subset of N = round(fraction N_f) fluid particles,
@@ -231,8 +231,9 @@ impl StepHook for Mcvsph {
         // Only the loss next to a vortex particle is used (Eq. 28), so the ideal vorticity is
         // needed on `reach`, and the vorticity one neighbourhood further (its Laplacian). The
         // stretching term needs the whole gradient only on `reach`; elsewhere the curl is
-        // enough. At 1 % vortex particles that ring holds three quarters of the fluid, and
-        // taking the curl everywhere costs less than finding the ring (measured at 389k).
+        // enough. At a few per cent vortex particles that ring holds most of the fluid, and
+        // taking the curl everywhere costs less than finding the ring (the book's benchmarks
+        // chapter, "Measurements behind design choices").
         self.mark_reach(&ctx.ops);
         let ops = Packed::new(ctx.ops, &mut self.positions, v);
         let (reach, velocity) = (&self.reach, &mut self.velocity);

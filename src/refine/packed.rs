@@ -2,16 +2,14 @@
 //! neighbour passes of the Rankine, VRSPH and MCVSPH refinements.
 //!
 //! **Why.** These refinements are a few passes over every pair, and their cost is measured
-//! against the DFSPH step (issue 6). In f64 on `Vec3`s a curl costs about 2.6 ns a pair (80k
-//! particles, one core): ten scalar loads and the cross product's scalar arithmetic. In a
-//! [`Field`] each particle's vector and volume V_j fill four f32 lanes ([`F4`]), so a
-//! neighbour is one 16-byte load and the arithmetic runs on four lanes: 1.9 ns for the curl,
-//! 2.1 for the gradient (f64: 3.1), 4.5 for the fused curl and Laplacian (6.3), 3.0 for the
-//! VRSPH stream function (4.2). Four neighbours side by side (transposed into one row per
-//! component, so that the dot products and divisions are four-lane operations) measured
-//! slower for the fused curl and Laplacian (6.6–6.8 against 5.3–5.4 ms at 91k, 2 threads):
-//! the rows and their constants need more than SSE's 16 registers. The stream function,
-//! whose only per-pair work is a weight of the distance, runs that way ([`Packed::quads`]).
+//! against the DFSPH step. In f64 on `Vec3`s a curl is ten scalar loads a pair and the cross
+//! product's scalar arithmetic. In a [`Field`] each particle's vector and volume V_j fill
+//! four f32 lanes ([`F4`]), so a neighbour is one 16-byte load and the arithmetic runs on
+//! four lanes, faster for every operator. Four neighbours side by side (transposed into one
+//! row per component) are slower for the fused curl and Laplacian: the rows and their
+//! constants need more than SSE's 16 registers. The stream function, whose only per-pair work
+//! is a weight of the distance, runs that way ([`Packed::quads`]). The timings behind both
+//! choices are in the book's benchmarks chapter ("Measurements behind design choices").
 //!
 //! **Precision.** The fields, positions (relative to the first particle) and sums are f32,
 //! like the cached kernel gradients the sums already read (relative rounding 6e-8): a result

@@ -568,9 +568,8 @@ impl Checker<'_> {
 
     /// A body of an SPH scene must be at least one particle `spacing` thick along every axis:
     /// the walls sample its surface at the spacing, so a thinner one has no inside, lets the
-    /// fluid through, and a box a few nanometres thick grew a boundary shell of one column per
-    /// few nanometres of its offset (a `refine_sloshing.toml` container 4e-7 m tall spent
-    /// minutes and gigabytes in the neighbour search). A capsule's caps make it a diameter long
+    /// fluid through, and a box a few nanometres thick grows a boundary shell of one column per
+    /// few nanometres of its offset (minutes and gigabytes in the neighbour search). A capsule's caps make it a diameter long
     /// whatever its half height. Meshes are not held to it: their samples follow their area.
     pub(super) fn thick_enough(
         &self,

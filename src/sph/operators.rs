@@ -8,7 +8,7 @@
 //!   dA_a / dx_b;
 //! - curl (Liu Eq. 6, Wang Eq. 6): `(curl A)_i = sum_j V_j (A_i - A_j) x grad W_ij`. Ye Eq. 21
 //!   prints `(A_j - A_i) x grad W_ij`, which is minus the curl with this `grad W_ij`
-//!   (PAPER-NOTES.md); the solid-body test in `tests/refine_operators.rs` fixes the sign;
+//!   (docs/src/paper-notes.md, "The curl's sign"); the solid-body test in `tests/refine_operators.rs` fixes the sign;
 //! - Laplacian (Ye Eq. 8): `2 (d + 2) sum_j V_j (A_ij . x_ij) / (|x_ij|^2 + 0.01 h^2) grad W_ij`.
 //!
 //! The curl is the antisymmetric part of the same gradient tensor, so one pass gives both.

@@ -1,5 +1,5 @@
 //! The vortex-particle kernel: a Gaussian in the vector potential (Pfaff et al. 2009, Eqs. 11–13),
-//! derived again because the printed equations carry typos (PAPER-NOTES.md).
+//! derived again because the printed equations carry typos (docs/src/paper-notes.md, "The vortex kernel").
 //!
 //! **Derivation.** Let `a = omega_p` (axis and strength), `d = x - x_p`, `r = |d|` and
 //! `g(r) = exp(-r^2 / (2 sigma^2))`, a Gaussian of standard deviation sigma in the squared

@@ -2,7 +2,7 @@
 //! Gaussian vector-potential kernel, their dynamics (advection, stretching, dissipation, split,
 //! merge), and the synthesis of their velocity onto whichever solver runs the scene.
 //!
-//! The layer knows nothing of MAC grids or SPH particles (DESIGN.md, "The one seam"): it reads
+//! The layer knows nothing of MAC grids or SPH particles (ARCHITECTURE.md, "The seams"): it reads
 //! velocity through [`VelocitySource`] and writes through [`VelocitySink`]; `grid` and `sph`
 //! implement both.
 

@@ -3,7 +3,7 @@
 //!
 //! - `wall layer` (lines 2–6): for each obstacle with a database, its motion relative to the
 //!   ambient flow, the lookup, and at each wall-attached cell the nearest precomputed point's
-//!   value, kept where it is larger in magnitude than the field's (PAPER-NOTES, line 5).
+//!   value, kept where it is larger in magnitude than the field's (docs/src/paper-notes.md, "Figure 9, line 5").
 //! - `abl advection` (line 9): omega_ABL, a cell-centred vector field, advected with the
 //!   grid's own scheme and zeroed inside obstacles.
 //! - `seeding` (lines 11–20): the shared routine over the cells with nonzero omega_ABL, with
@@ -41,8 +41,7 @@ pub const PARTS: [&str; 5] = [
 
 /// Below this fraction of the field's largest magnitude, omega_ABL is flushed to zero after
 /// advection. Interpolating advection spreads a plume's tails over the whole grid within a few
-/// hundred steps (211,000 of the 288,000 cells of the cavity at paper scale held some), and
-/// every nonzero cell costs a random draw and a place in the seeding's neighbour search; what
+/// hundred steps (most of the cavity's cells at paper scale held some), and every nonzero cell costs a random draw and a place in the seeding's neighbour search; what
 /// is flushed is at most this fraction of the peak per cell.
 pub const FLUSH: Real = 1e-6;
 

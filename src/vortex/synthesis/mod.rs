@@ -6,7 +6,7 @@
 //!    `w_k = sum (omega_D - omega) . a_k / sum omega_D . a_k` over the samples inside the
 //!    particle's cut-off, `a_k` its unit axis. A particle whose denominator is negligible
 //!    (under `1e-6` of the sum of `|omega_D . a_k|`) or that covers no sample is skipped with
-//!    weight zero (PAPER-NOTES.md, Eq. 14 guard).
+//!    weight zero (docs/src/paper-notes.md, "Eq. 14").
 //! 4. The weight is clamped to `[0, 1]`: a particle adds at most its own kernel in a step and
 //!    never removes the flow's vorticity. Unclamped, Eq. 14 regulates the grid's vorticity under
 //!    a kernel *to* `omega_D` in one step whatever it was: a weak particle drifting over the

@@ -28,6 +28,7 @@ pub mod refine;
 pub mod scene;
 pub mod simd;
 pub mod spatial;
+pub mod state;
 pub mod sph;
 pub mod stepping;
 pub mod vortex;

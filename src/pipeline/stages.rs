@@ -12,6 +12,7 @@ use crate::metrics::{
     grid_vorticity_stats, GridProbeRecorder, Metric, MetricsRecorder, Probe, ProbeRecorder,
 };
 use crate::sph::StepStats;
+use crate::state::{Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// What the stages of one step share: the clock and what the solvers reported.
@@ -97,6 +98,15 @@ pub trait Stage: Send {
     /// The state was edited between steps (velocities written from Python): anything the
     /// stage measured of it for its next row is measured again.
     fn state_edited(&mut self, _sim: &Simulation) {}
+
+    /// Puts what it carries from one step to the next (a generator, running sums, the rows it
+    /// has written) into a checkpoint; most stages keep their state in the [`Simulation`].
+    fn save(&self, _into: &mut Saver) {}
+
+    /// Restores what [`Stage::save`] put, into the stage freshly built from the same scene.
+    fn restore(&mut self, _from: &Restorer) -> Result<(), StateError> {
+        Ok(())
+    }
 }
 
 /// The SPH step over the shared `dt`: divergence solve, hooks, forces, pressure, positions.

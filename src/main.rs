@@ -6,6 +6,8 @@ use eddy::pipeline::{self as run, Pipeline, Plan, RunOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 mod cli;
 
@@ -45,6 +47,25 @@ enum Command {
         /// this TOML file: what `eddy sweep` reads of each point.
         #[arg(long, value_name = "FILE")]
         status: Option<PathBuf>,
+        /// Go on from the checkpoint in the output folder (checkpoint.h5) instead of starting
+        /// at t = 0; the scene may differ from the checkpoint's only in time.end, time.steps
+        /// and the [output] keys.
+        #[arg(long)]
+        resume: bool,
+    },
+    /// Go on with the run in DIR from its checkpoint (checkpoint.h5, written every
+    /// output.checkpoint_interval or output.checkpoint_every, and when SIGINT or SIGTERM
+    /// stops a run), with the scene it ran (DIR/scene.toml).
+    Resume {
+        /// The run's output folder.
+        dir: PathBuf,
+        /// Override a key of the run's scene, e.g. --set time.end=10 (repeatable; only
+        /// time.end, time.steps and [output] keys may change).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Stop at this simulated time (s) if it comes first.
+        #[arg(long)]
+        until: Option<f64>,
     },
     /// A parameter study of a scene: one run per point of the varied values, each in its own
     /// folder, and a sweep.csv with how each ended, its steps, wall time and peak memory.
@@ -130,13 +151,33 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            let interrupted = e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref::<run::RunError>(),
+                    Some(run::RunError::Interrupted { .. })
+                )
+            });
+            if interrupted {
+                ExitCode::from(run::INTERRUPTED_EXIT)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }
 
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
+        Command::Resume { dir, set, until } => {
+            let options = RunOptions {
+                out: Some(dir.clone()),
+                overrides: set,
+                until,
+                resume: true,
+                ..RunOptions::default()
+            };
+            run_one(dir.join(run::outputs::SCENE_FILE), options, false)?;
+        }
         Command::Run {
             scene,
             out,
@@ -145,8 +186,17 @@ fn run(command: Command) -> anyhow::Result<()> {
             steps,
             plan,
             status,
+            resume,
         } => {
-            let result = run_one(scene, out, set, until, steps, plan);
+            let options = RunOptions {
+                out,
+                overrides: set,
+                until,
+                steps,
+                resume,
+                ..RunOptions::default()
+            };
+            let result = run_one(scene, options, plan);
             if let Some(path) = status {
                 let (how, cause) = match &result {
                     Ok(()) => (cli::sweep::Status::Finished, String::new()),
@@ -263,23 +313,22 @@ fn run(command: Command) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A flag SIGINT and SIGTERM set (what a scheduler sends before it kills a job): the run
+/// writes a checkpoint after the step in progress and stops. A second signal ends the process
+/// at once.
+fn stop_flag() -> anyhow::Result<Arc<AtomicBool>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let flag = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 130, flag.clone())?;
+        signal_hook::flag::register(signal, flag.clone())?;
+    }
+    Ok(flag)
+}
+
 /// `eddy run`: the plan, or the run with its summary line.
-fn run_one(
-    scene: PathBuf,
-    out: Option<PathBuf>,
-    set: Vec<String>,
-    until: Option<f64>,
-    steps: Option<u64>,
-    plan: bool,
-) -> anyhow::Result<()> {
-    let options = RunOptions {
-        out,
-        overrides: set,
-        until,
-        steps,
-        progress: std::io::stderr().is_terminal(),
-        trace: false,
-    };
+fn run_one(scene: PathBuf, mut options: RunOptions, plan: bool) -> anyhow::Result<()> {
+    options.progress = std::io::stderr().is_terminal();
     let resolved = run::resolve(&scene, &options)?;
     if plan {
         let built =
@@ -288,10 +337,12 @@ fn run_one(
         return Ok(());
     }
     eprintln!(
-        "eddy: running {} -> {}",
+        "eddy: {} {} -> {}",
+        if options.resume { "resuming" } else { "running" },
         scene.display(),
         run::output_dir(&resolved, &options).display()
     );
+    options.stop = Some(stop_flag()?);
     let s = run::run_scene(&resolved, &options)
         .with_context(|| format!("running {}", scene.display()))?;
     let rate = |n: usize| s.steps as f64 * n as f64 / s.wall_seconds / 1e6;

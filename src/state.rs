@@ -194,6 +194,11 @@ impl Restorer<'_> {
         }
     }
 
+    /// The full path of the entry `name`, for a part's own errors.
+    pub fn path(&self, name: &str) -> String {
+        join(&self.prefix, name)
+    }
+
     /// Whether the entry `name` is there (for optional parts).
     pub fn has(&self, name: &str) -> bool {
         let path = join(&self.prefix, name);

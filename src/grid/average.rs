@@ -30,6 +30,16 @@ impl RunningAverage {
         self.time += dt;
     }
 
+    /// The sums and the time they span (a checkpoint's).
+    pub fn sum(&self) -> &[Array3<Real>; 3] {
+        &self.sum
+    }
+
+    /// An average from [`Self::sum`] and [`Self::time`] (a checkpoint's).
+    pub fn from_parts(sum: [Array3<Real>; 3], time: Real) -> Self {
+        Self { sum, time }
+    }
+
     /// Time covered so far, s.
     pub fn time(&self) -> Real {
         self.time

@@ -18,6 +18,7 @@ pub mod liquid;
 pub mod mac;
 mod multigrid;
 pub mod params;
+mod persist;
 mod pcg;
 pub mod poisson;
 pub mod project;

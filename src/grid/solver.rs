@@ -95,7 +95,7 @@ pub struct GridSolver {
     /// Each velocity component's viscosity system of the last step.
     diffusion: [Option<DiffusionSystem>; 3],
     /// p dt / (rho dx) of the last projection: the next solve's warm start.
-    scaled_pressure: Array3<Real>,
+    pub(super) scaled_pressure: Array3<Real>,
     /// The advected velocity of a step, swapped with `mac.u` (no allocation per step).
     advected: [Array3<Real>; 3],
     /// The velocity at the start of a step, for [`GridStepStats::change_rate`].
@@ -116,8 +116,8 @@ pub struct GridSolver {
     /// The parts the last [`Self::advance`] ran, in order (named as [`Self::describe`] names
     /// them).
     ran: Vec<&'static str>,
-    time: Real,
-    step: u64,
+    pub(super) time: Real,
+    pub(super) step: u64,
 }
 
 impl GridSolver {

@@ -22,6 +22,8 @@ pub struct CsvSeries {
     line: String,
     /// The last row written, for readers that step a run themselves (the Python bindings).
     last: Vec<Real>,
+    /// Rows in the file below the header.
+    rows: u64,
 }
 
 impl CsvSeries {
@@ -48,6 +50,7 @@ impl CsvSeries {
             columns: columns.to_vec(),
             line: String::new(),
             last: Vec::new(),
+            rows: 0,
         })
     }
 
@@ -76,6 +79,33 @@ impl CsvSeries {
             .write_all(self.line.as_bytes())
             .map_err(|e| IoError::io(&self.path, "appending a row to", e))?;
         self.last = values.to_vec();
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Rows written below the header.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Appends the rows of `kept` ([`kept_rows`] of the file this series replaced) to a series
+    /// just created, after checking that its header is this series' own.
+    pub fn go_on_from(&mut self, kept: &KeptRows) -> Result<(), IoError> {
+        let header = self.columns.iter().map(|c| quote(c)).collect::<Vec<_>>();
+        if kept.header != header.join(",") {
+            return Err(IoError::invalid(
+                &self.path,
+                format!(
+                    "the checkpoint's run wrote the columns {:?}, this run writes {:?}",
+                    kept.header,
+                    header.join(",")
+                ),
+            ));
+        }
+        self.file
+            .write_all(kept.rows.as_bytes())
+            .map_err(|e| IoError::io(&self.path, "appending the kept rows to", e))?;
+        self.rows = kept.count;
         Ok(())
     }
 
@@ -89,6 +119,40 @@ impl CsvSeries {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// The header and the first rows of a series' file, read before a resumed run replaces it.
+#[derive(Debug, Clone)]
+pub struct KeptRows {
+    header: String,
+    rows: String,
+    count: u64,
+}
+
+/// Reads the header and the first `count` rows of the series `path` (a checkpoint's rows; any
+/// after them were written past the checkpoint and are dropped); an error when it has fewer.
+pub fn kept_rows(path: &Path, count: u64) -> Result<KeptRows, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, "reading", e))?;
+    let mut lines = text.split_inclusive('\n');
+    let header = lines.next().unwrap_or_default().trim_end().to_owned();
+    let rows: Vec<&str> = lines
+        .take(count as usize)
+        .take_while(|l| l.ends_with('\n'))
+        .collect();
+    if (rows.len() as u64) < count {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "{} whole rows, the checkpoint counted {count}: the file was changed after it",
+                rows.len()
+            ),
+        ));
+    }
+    Ok(KeptRows {
+        header,
+        rows: rows.concat(),
+        count,
+    })
 }
 
 /// Plain decimals where they stay short, exponent form elsewhere; both round-trip exactly.

@@ -7,6 +7,7 @@
 //! ([`Hdf5Frames`], [`Hdf5GridFrames`]), and CSV rows reach the OS one whole row at a time ([`CsvSeries`]).
 
 mod atomic;
+mod checkpoint;
 mod csv;
 mod error;
 mod frame;
@@ -26,7 +27,10 @@ mod xdmf;
 mod zlib;
 
 pub use atomic::write_atomic;
-pub use csv::CsvSeries;
+pub use checkpoint::{
+    read_checkpoint, write_checkpoint, StoredCheckpoint, CHECKPOINT_FORMAT, CHECKPOINT_VERSION,
+};
+pub use csv::{kept_rows, CsvSeries, KeptRows};
 pub use error::IoError;
 pub use frame::{Field, FieldData, ParticleFrame};
 pub use grid_frame::{GridField, GridFieldData, GridFrame};

@@ -52,6 +52,20 @@ impl PvdSeries {
         result
     }
 
+    /// The entries listed so far: (time, file name).
+    pub fn entries(&self) -> &[(Real, String)] {
+        &self.entries
+    }
+
+    /// A series that goes on from `entries` (a resumed run's frames); the file is rewritten
+    /// with the next push.
+    pub fn resumed(path: &Path, entries: Vec<(Real, String)>) -> Self {
+        PvdSeries {
+            path: path.to_path_buf(),
+            entries,
+        }
+    }
+
     /// The series file's path.
     pub fn path(&self) -> &Path {
         &self.path

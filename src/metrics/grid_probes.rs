@@ -276,6 +276,11 @@ impl GridProbeRecorder {
         &self.csv
     }
 
+    /// The series, to go on from a checkpoint's rows.
+    pub fn series_mut(&mut self) -> &mut CsvSeries {
+        &mut self.csv
+    }
+
     /// Creates `path` with step, time, then `NAME_p, NAME_vx, NAME_vy, NAME_vz` per point probe
     /// and `NAME_{fx,fy,fz}_{pressure,viscous}` per force probe. `body_index` maps an obstacle
     /// name to its index among the solver's bodies.

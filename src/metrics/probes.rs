@@ -44,6 +44,11 @@ impl ProbeRecorder {
         &self.csv
     }
 
+    /// The series, to go on from a checkpoint's rows.
+    pub fn series_mut(&mut self) -> &mut CsvSeries {
+        &mut self.csv
+    }
+
     /// Creates `path` with a header: step, time, then a front probe's name, or a point probe's
     /// `NAME_p, NAME_vx, NAME_vy, NAME_vz`.
     pub fn create(path: &Path, probes: &[Probe]) -> Result<Self, IoError> {

@@ -25,6 +25,11 @@ impl MetricsRecorder {
         &self.csv
     }
 
+    /// The series, to go on from a checkpoint's rows.
+    pub fn series_mut(&mut self) -> &mut CsvSeries {
+        &mut self.csv
+    }
+
     /// Creates `path` with the header for `metrics`, then the `extra` columns another stage
     /// reports (the turbulence stage's).
     pub fn create(path: &Path, metrics: &[Metric], extra: &[String]) -> Result<Self, IoError> {

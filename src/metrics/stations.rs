@@ -21,7 +21,8 @@
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
-use super::statistics::{CellMoments, Lattice, STRESS_PAIRS};
+use super::statistics::{restore_moments, save_moments, CellMoments, Lattice, STRESS_PAIRS};
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// A station as a scene gives it: a box from `min` to `max` cut into `bins` along `axis`.
@@ -225,6 +226,38 @@ pub fn half_width(values: &[Real]) -> Real {
         .map(|d| d.inverse_cdf(0.975))
         .unwrap_or(Real::NAN);
     t * (var / n as Real).sqrt()
+}
+
+/// The moments its batch began from and the completed batches' bin values.
+impl Persist for Station {
+    fn save(&self, into: &mut Saver) {
+        save_moments(into, "start", &self.start);
+        let values: Vec<Real> = self
+            .batches
+            .iter()
+            .flatten()
+            .flat_map(|(u, k)| u.iter().copied().chain([*k]))
+            .collect();
+        into.reals("batches", &values);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        restore_moments(from, "start", &mut self.start)?;
+        let values = from.reals("batches")?;
+        let per_batch = (4 * self.cells.len()).max(1);
+        if values.len() % per_batch != 0 {
+            return Err(StateError::Mismatch {
+                name: from.path("batches"),
+                found: format!("{} values", values.len()),
+                expected: format!("a multiple of {per_batch} (U and k per bin)"),
+            });
+        }
+        self.batches = values
+            .chunks_exact(per_batch)
+            .map(|b| b.chunks_exact(4).map(|v| ([v[0], v[1], v[2]], v[3])).collect())
+            .collect();
+        Ok(())
+    }
 }
 
 impl CellMoments {

@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use super::stations::{Station, StationSpec};
 use crate::grid::forces::CellVorticity;
 use crate::grid::GridSolver;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// The running moments of one cell.
@@ -309,5 +310,90 @@ impl FlowStatistics {
             )
             .expect("one value per cell"),
         }
+    }
+}
+
+/// Reals per cell in a checkpoint: weight, mean, co-moments, vorticity, enstrophy.
+const REALS_PER_CELL: usize = 14;
+
+/// Packs moments for a checkpoint (the counts apart, as integers).
+pub(crate) fn save_moments(into: &mut Saver, name: &str, cells: &[CellMoments]) {
+    let mut s = into.section(name);
+    let reals: Vec<Real> = cells
+        .iter()
+        .flat_map(|c| {
+            std::iter::once(c.weight)
+                .chain(c.mean)
+                .chain(c.co)
+                .chain(c.vorticity)
+                .chain([c.enstrophy])
+        })
+        .collect();
+    s.reals("reals", &reals);
+    s.u64s("samples", &cells.iter().map(|c| c.samples).collect::<Vec<_>>());
+}
+
+/// Unpacks [`save_moments`] into `cells`, whose length the lattice fixes.
+pub(crate) fn restore_moments(
+    from: &Restorer,
+    name: &str,
+    cells: &mut [CellMoments],
+) -> Result<(), StateError> {
+    let r = from.section(name);
+    let reals = r.reals_n("reals", REALS_PER_CELL * cells.len())?;
+    let samples = r.u64s("samples")?;
+    if samples.len() != cells.len() {
+        return Err(StateError::Mismatch {
+            name: r.path("samples"),
+            found: format!("{} values", samples.len()),
+            expected: format!("{}, one per cell", cells.len()),
+        });
+    }
+    for ((c, v), &n) in cells.iter_mut().zip(reals.chunks_exact(REALS_PER_CELL)).zip(&samples) {
+        *c = CellMoments {
+            weight: v[0],
+            samples: n,
+            mean: [v[1], v[2], v[3]],
+            co: [v[4], v[5], v[6], v[7], v[8], v[9]],
+            vorticity: [v[10], v[11], v[12]],
+            enstrophy: v[13],
+        };
+    }
+    Ok(())
+}
+
+/// The moments, the span and count of the samples, the stations' batches and when the next
+/// batch ends; a sample's bin sums are scratch.
+impl Persist for FlowStatistics {
+    fn save(&self, into: &mut Saver) {
+        save_moments(into, "cells", &self.cells);
+        if let Some((a, b)) = self.span {
+            into.reals("span", &[a, b]);
+        }
+        into.u64("steps", self.steps);
+        if let Some((end, length)) = self.batch {
+            into.reals("batch", &[end, length]);
+        }
+        for (i, s) in self.stations.iter().enumerate() {
+            s.save(&mut into.section(&format!("station_{i}")));
+        }
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        restore_moments(from, "cells", &mut self.cells)?;
+        let pair = |name| -> Result<Option<(Real, Real)>, StateError> {
+            if !from.has(name) {
+                return Ok(None);
+            }
+            let v = from.reals_n(name, 2)?;
+            Ok(Some((v[0], v[1])))
+        };
+        self.span = pair("span")?;
+        self.batch = pair("batch")?;
+        self.steps = from.u64("steps")?;
+        for (i, s) in self.stations.iter_mut().enumerate() {
+            s.restore(&from.section(&format!("station_{i}")))?;
+        }
+        Ok(())
     }
 }

@@ -3,17 +3,19 @@
 //! the frames written so far.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::build::Pipeline;
-use super::outputs::{remove_earlier_outputs, SCENE_FILE};
+use super::checkpoint::{self, CheckpointError};
+use super::outputs::{remove_earlier_outputs, CHECKPOINT_FILE, SCENE_FILE};
 use super::plan::Plan;
 use super::simulation::StepError;
 use super::stages::StepRecord;
 use super::{output_dir, RunError, RunOptions, RunSummary};
-use crate::io::{write_atomic, IoError};
+use crate::io::{write_atomic, write_checkpoint, IoError};
 use crate::scene::Scene;
 use crate::stepping::towards_end;
 use crate::Real;
@@ -29,13 +31,30 @@ struct End {
     steady: Option<Real>,
 }
 
-/// Runs an already resolved scene into its output folder.
+/// Runs an already resolved scene into its output folder (from its checkpoint with
+/// [`RunOptions::resume`]). A stop asked for through [`RunOptions::stop`] writes a checkpoint
+/// after the step in progress and ends the run with [`RunError::Interrupted`].
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let mut run = Run::start(scene, options)?;
+    let mut run = if options.resume {
+        Run::resume(scene, options)?
+    } else {
+        Run::start(scene, options)?
+    };
     let bar = progress_bar(options.progress, &run.end);
     let mut trace = Vec::new();
     while let Some(rec) = run.advance(options.trace.then_some(&mut trace))? {
         update_bar(&bar, &run.end, &run.pipeline, &rec);
+        if options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst)) {
+            bar.finish_and_clear();
+            run.checkpoint()?;
+            let sim = &run.pipeline.sim;
+            return Err(RunError::Interrupted {
+                time: sim.time(),
+                steps: sim.steps(),
+                frames: run.pipeline.outputs.frames(),
+                out: run.out.clone(),
+            });
+        }
     }
     bar.finish_and_clear();
     let mut summary = run.finish()?;
@@ -58,6 +77,49 @@ pub struct Run {
     ended: bool,
     plan: Plan,
     started: Instant,
+    /// The scene as checkpoints record it (see `checkpoint::comparable`).
+    scene_key: String,
+    checkpoints: Schedule,
+}
+
+/// When checkpoints are written: every `interval` s of simulated time, every `every` of wall
+/// time.
+struct Schedule {
+    interval: Option<Real>,
+    /// The next checkpoint time's index (its time is a product, so the times do not drift).
+    next: u64,
+    every: Option<Duration>,
+    last: Instant,
+}
+
+impl Schedule {
+    fn new(scene: &Scene, time: Real) -> Self {
+        let interval = scene.output.checkpoint_interval;
+        Self {
+            interval,
+            next: interval.map_or(0, |dt| (time / dt + TIME_EPS).floor() as u64 + 1),
+            every: scene
+                .output
+                .checkpoint_every
+                .map(|m| Duration::from_secs_f64(60.0 * m)),
+            last: Instant::now(),
+        }
+    }
+
+    /// Whether one is due at `time`; if so, the next is scheduled.
+    fn due(&mut self, time: Real) -> bool {
+        let by_time = self
+            .interval
+            .is_some_and(|dt| time >= self.next as Real * dt - TIME_EPS);
+        let by_wall = self.every.is_some_and(|e| self.last.elapsed() >= e);
+        if by_time || by_wall {
+            if let Some(dt) = self.interval {
+                self.next = (time / dt + TIME_EPS).floor() as u64 + 1;
+            }
+            self.last = Instant::now();
+        }
+        by_time || by_wall
+    }
 }
 
 impl Run {
@@ -86,8 +148,35 @@ impl Run {
         // written no frame: its error says what is wrong and nothing about frames.
         let mut pipeline = Pipeline::build(scene)?;
         pipeline.open(&out)?;
+        Ok(Run::assemble(pipeline, scene, out, 0, started))
+    }
+
+    /// Goes on from the checkpoint in the scene's output folder: the pipeline built from the
+    /// same scene (only `time.end`, `time.steps` and the output keys may differ) takes back
+    /// the saved state; frames, series and statistics go on from it, no row written twice.
+    pub fn resume(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+        let started = Instant::now();
+        options.check()?;
+        let scene = &options.apply(scene);
+        let out = output_dir(scene, options);
+        let state = checkpoint::load(&out, scene)?;
+        let invalid = |source| CheckpointError::State {
+            path: out.join(CHECKPOINT_FILE),
+            source,
+        };
+        let frame = state.read("run").u64("frame").map_err(invalid)?;
+        let mut pipeline = Pipeline::build(scene)?;
+        pipeline.open_to_resume(&out, &state)?;
+        pipeline.restore_state(&state).map_err(invalid)?;
+        let resolved = scene.to_toml();
+        write_atomic(&out.join(SCENE_FILE), |w| w.write_all(resolved.as_bytes()))?;
+        Ok(Run::assemble(pipeline, scene, out, frame, started))
+    }
+
+    fn assemble(pipeline: Pipeline, scene: &Scene, out: PathBuf, frame: u64, started: Instant) -> Self {
         let plan = Plan::of(&pipeline);
-        Ok(Run {
+        let time = pipeline.sim.time();
+        Run {
             pipeline,
             out,
             end: End {
@@ -95,12 +184,26 @@ impl Run {
                 steps: scene.time.steps,
                 steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
             },
-            frame: 0,
+            frame,
             steady: false,
             ended: false,
             plan,
             started,
-        })
+            scene_key: checkpoint::comparable(scene),
+            checkpoints: Schedule::new(scene, time),
+        }
+    }
+
+    /// Writes the run's state between steps to `checkpoint.h5` in its folder (under a
+    /// temporary name, then renamed: a kill during the write keeps the previous one).
+    pub fn checkpoint(&self) -> Result<PathBuf, RunError> {
+        let mut state = self.pipeline.save_state();
+        state.section("run").u64("frame", self.frame);
+        let path = self.out.join(CHECKPOINT_FILE);
+        let sim = &self.pipeline.sim;
+        let attrs = checkpoint::attributes(&self.scene_key, sim.time(), sim.steps());
+        write_checkpoint(&path, &attrs, &state)?;
+        Ok(path)
     }
 
     /// Writes the frame that is due, then takes one step; `None`, once the run has reached its
@@ -140,6 +243,9 @@ impl Run {
             .steady
             .zip(rec.grid)
             .is_some_and(|(tol, g)| g.change_rate < tol);
+        if self.checkpoints.due(self.pipeline.sim.time()) {
+            self.checkpoint()?;
+        }
         Ok(Some(rec))
     }
 

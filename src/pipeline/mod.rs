@@ -8,6 +8,7 @@
 //! shortens it to land on the end time, and runs the stages with it.
 
 mod build;
+mod checkpoint;
 mod coupling;
 mod driver;
 mod footprint;
@@ -22,6 +23,7 @@ mod turbulence;
 use std::path::{Path, PathBuf};
 
 pub use build::{grid_solver, sph_solver, Pipeline};
+pub use checkpoint::{CheckpointError, INTERRUPTED_EXIT};
 pub use coupling::{Exchange, DRAG_HEIGHT};
 pub use driver::{run_scene, Run};
 pub use footprint::{available_memory, Footprint};
@@ -73,6 +75,20 @@ pub enum RunError {
     },
     #[error("{0}")]
     Unsupported(String),
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    #[error(
+        "stopped by a signal at t = {time} s (step {steps}); the checkpoint and the {frames} \
+         frames written so far are in {}: go on with `eddy resume {}`",
+        out.display(),
+        out.display()
+    )]
+    Interrupted {
+        time: Real,
+        steps: u64,
+        frames: usize,
+        out: PathBuf,
+    },
     #[error(
         "scene '{scene}' needs {footprint}, more than the {} MiB this machine has available; \
          coarsen fluid.spacing or grid.resolution",
@@ -106,6 +122,11 @@ pub struct RunOptions {
     pub progress: bool,
     /// Record the stage trace in the summary (see [`Plan::step_trace`]).
     pub trace: bool,
+    /// Go on from the checkpoint in the output folder instead of starting at t = 0.
+    pub resume: bool,
+    /// Set from outside (a signal handler): the run writes a checkpoint after the step in
+    /// progress and stops with [`RunError::Interrupted`].
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// What a finished run did.

@@ -95,6 +95,11 @@ pub trait Stage: Send {
         None
     }
 
+    /// The same series, to go on from a checkpoint's rows.
+    fn series_mut(&mut self) -> Option<&mut CsvSeries> {
+        None
+    }
+
     /// The state was edited between steps (velocities written from Python): anything the
     /// stage measured of it for its next row is measured again.
     fn state_edited(&mut self, _sim: &Simulation) {}
@@ -205,6 +210,10 @@ impl Stage for SphProbes {
     fn series(&self) -> Option<&CsvSeries> {
         self.recorder.as_ref().map(|r| r.series())
     }
+
+    fn series_mut(&mut self) -> Option<&mut CsvSeries> {
+        self.recorder.as_mut().map(|r| r.series_mut())
+    }
 }
 
 /// Point and force probes of a grid at the start of each step, into `probes.csv`.
@@ -244,6 +253,10 @@ impl Stage for GridProbes {
 
     fn series(&self) -> Option<&CsvSeries> {
         self.recorder.as_ref().map(|r| r.series())
+    }
+
+    fn series_mut(&mut self) -> Option<&mut CsvSeries> {
+        self.recorder.as_mut().map(|r| r.series_mut())
     }
 }
 
@@ -310,6 +323,10 @@ impl Stage for SphMetrics {
 
     fn series(&self) -> Option<&CsvSeries> {
         self.recorder.as_ref().map(|(r, _)| r.series())
+    }
+
+    fn series_mut(&mut self) -> Option<&mut CsvSeries> {
+        self.recorder.as_mut().map(|(r, _)| r.series_mut())
     }
 
     fn state_edited(&mut self, sim: &Simulation) {
@@ -420,5 +437,23 @@ impl Stage for GridMetrics {
 
     fn series(&self) -> Option<&CsvSeries> {
         self.csv.as_ref()
+    }
+
+    fn series_mut(&mut self) -> Option<&mut CsvSeries> {
+        self.csv.as_mut()
+    }
+
+    /// The Taylor–Green decay's reference energy, measured when the run opened.
+    fn save(&self, into: &mut Saver) {
+        if let Some(tg) = &self.taylor_green {
+            into.real("taylor_green_initial_energy", tg.initial_energy);
+        }
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        if let Some(tg) = self.taylor_green.as_mut() {
+            tg.initial_energy = from.real("taylor_green_initial_energy")?;
+        }
+        Ok(())
     }
 }

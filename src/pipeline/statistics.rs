@@ -9,6 +9,7 @@ use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
 use super::RunError;
 use crate::metrics::stations::StationSpec;
+use crate::state::{Restorer, Saver, StateError};
 use crate::metrics::statistics::{FlowStatistics, Lattice, BYTES_PER_BIN, BYTES_PER_CELL};
 use crate::{Real, Vec3};
 
@@ -122,6 +123,16 @@ impl Stage for StatisticsStage {
             ),
             parts,
         )
+    }
+
+    fn save(&self, into: &mut Saver) {
+        into.u64("pending_steps", self.pending.0);
+        into.real("pending_time", self.pending.1);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        self.pending = (from.u64("pending_steps")?, from.real("pending_time")?);
+        Ok(())
     }
 
     fn run(&mut self, sim: &mut Simulation, rec: &mut StepRecord) -> Result<(), StepError> {

@@ -295,6 +295,11 @@ pub static RANGES: &[KeyRange] = &[
     rule("statistics.stations[].max", "inside the domain, > `min` along each axis"),
     range("statistics.stations[].bins", Interval::closed(1.0, 100_000.0).whole()),
     range("output.interval", POSITIVE),
+    range("output.checkpoint_interval", POSITIVE),
+    range(
+        "output.checkpoint_every",
+        Interval::gt(0.0).noted("minutes of wall-clock time"),
+    ),
     rule(
         "output.metrics",
         "each at most once, and offered by a solver of the scene",

@@ -277,6 +277,14 @@ pub struct Output {
     /// (`eddy::pipeline::outputs::register`); none by default.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub formats: Vec<String>,
+    /// Simulated time between checkpoints (`checkpoint.h5`, the whole state a run needs to go
+    /// on with `eddy resume`), s; none by default. A run also writes one when it receives
+    /// SIGINT or SIGTERM, whatever this says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkpoint_interval: Option<Real>,
+    /// Wall-clock minutes between checkpoints (for a job with a time limit); none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkpoint_every: Option<Real>,
 }
 
 pub(super) fn default_true() -> bool {
@@ -300,6 +308,8 @@ impl Default for Output {
             precision: Default::default(),
             metrics: None,
             formats: Vec::new(),
+            checkpoint_interval: None,
+            checkpoint_every: None,
         }
     }
 }

@@ -126,6 +126,12 @@ impl Scene {
         self.validate_statistics(&c)?;
         c.ranged("output.interval", self.output.interval)?;
         c.ranged("output.compression", Real::from(self.output.compression))?;
+        if let Some(t) = self.output.checkpoint_interval {
+            c.ranged("output.checkpoint_interval", t)?;
+        }
+        if let Some(m) = self.output.checkpoint_every {
+            c.ranged("output.checkpoint_every", m)?;
+        }
         self.validate_metrics(&c)
     }
 

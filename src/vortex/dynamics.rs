@@ -253,6 +253,18 @@ pub struct Dynamics {
     rng: ChaCha8Rng,
 }
 
+/// The split displacements' generator is the dynamics' only state between steps.
+impl crate::state::Persist for Dynamics {
+    fn save(&self, into: &mut crate::state::Saver) {
+        into.rng("rng", &self.rng);
+    }
+
+    fn restore(&mut self, from: &crate::state::Restorer) -> Result<(), crate::state::StateError> {
+        self.rng = from.rng("rng")?;
+        Ok(())
+    }
+}
+
 impl Dynamics {
     /// Dynamics with validated settings and a seed for the split displacements.
     pub fn new(settings: DynamicsSettings, seed: u64) -> Result<Self, VortexError> {

@@ -78,3 +78,29 @@ fn retain_by<T>(v: &mut Vec<T>, keep: &[bool]) {
     let mut flags = keep.iter();
     v.retain(|_| *flags.next().unwrap_or(&true));
 }
+
+impl crate::state::Persist for VortexParticles {
+    fn save(&self, into: &mut crate::state::Saver) {
+        into.vec3s("x", &self.x);
+        into.vec3s("omega", &self.omega);
+        into.reals("sigma", &self.sigma);
+        into.reals("age", &self.age);
+    }
+
+    fn restore(&mut self, from: &crate::state::Restorer) -> Result<(), crate::state::StateError> {
+        let x = from.vec3s("x")?;
+        let n = x.len();
+        self.omega = from.vec3s("omega")?;
+        if self.omega.len() != n {
+            return Err(crate::state::StateError::Mismatch {
+                name: from.path("omega"),
+                found: format!("{} vectors", self.omega.len()),
+                expected: format!("{n}, one per particle"),
+            });
+        }
+        self.sigma = from.reals_n("sigma", n)?;
+        self.age = from.reals_n("age", n)?;
+        self.x = x;
+        Ok(())
+    }
+}

@@ -84,9 +84,13 @@ pub const METRICS_FILE: &str = "metrics.csv";
 /// The point and force probes' rows (one per medium in a scene with both).
 pub const PROBES_FILE: &str = "probes.csv";
 
+/// The last checkpoint of a run (`eddy resume` goes on from it).
+pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
+
 /// The files the stages and the driver write, beside the output formats' own.
-pub const STAGE_FILES: [RunFile; 3] = [
+pub const STAGE_FILES: [RunFile; 4] = [
     RunFile::Fixed(SCENE_FILE),
+    RunFile::Fixed(CHECKPOINT_FILE),
     RunFile::PerMedium(METRICS_FILE),
     RunFile::PerMedium(PROBES_FILE),
 ];

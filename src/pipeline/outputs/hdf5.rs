@@ -166,6 +166,21 @@ impl Output for Hdf5Output {
         let g = self.grid.as_ref().map_or(0, |h| h.len());
         p.max(g) as usize
     }
+
+    /// The frames files are appended to, and going on would need them cut back to the
+    /// checkpoint's frames: not done yet, so a resume is refused before anything is written.
+    fn resume(
+        &mut self,
+        _sim: &Simulation,
+        out: &Path,
+        _from: &crate::state::Restorer,
+    ) -> Result<(), IoError> {
+        Err(IoError::invalid(
+            out,
+            "a run with HDF5 frames (output.hdf5 = true) cannot be resumed yet; resume it with \
+             --set output.hdf5=false (its VTK frames and statistics go on)",
+        ))
+    }
 }
 
 fn has_fine_smoke(sim: &Simulation) -> bool {

@@ -16,7 +16,8 @@ use std::path::Path;
 use std::sync::RwLock;
 
 pub use files::{
-    is_run_output, remove_earlier_outputs, Kind, RunFile, METRICS_FILE, PROBES_FILE, SCENE_FILE,
+    is_run_output, remove_earlier_outputs, Kind, RunFile, CHECKPOINT_FILE, METRICS_FILE, PROBES_FILE,
+    SCENE_FILE,
     STAGE_FILES,
 };
 pub use frame::Frame;
@@ -25,6 +26,7 @@ pub use statistics::{write_statistics, STATISTICS_FORMAT, STATISTICS_FORMAT_VERS
 
 use super::{RunError, Simulation};
 use crate::io::{AttrValue, IoError, VtkOptions};
+use crate::state::{Restorer, Saver};
 use crate::Real;
 
 /// What a run asked to have written: the scene's `[output]` and line probes, resolved by
@@ -73,6 +75,17 @@ pub trait Output: Send {
     /// Frames written so far (0 for an output that writes none).
     fn frames(&self) -> usize {
         0
+    }
+
+    /// Puts what it needs to go on after a resume (the frames it has listed) into a
+    /// checkpoint.
+    fn save(&self, _into: &mut Saver) {}
+
+    /// Opens its files in `out` to go on from a checkpoint, instead of [`Output::open`]. An
+    /// output that rewrites whole files at every frame (the statistics, the profiles, the
+    /// average) opens as usual; one that appends must say how it goes on, or refuse.
+    fn resume(&mut self, sim: &Simulation, out: &Path, _from: &Restorer) -> Result<(), IoError> {
+        self.open(sim, out)
     }
 }
 
@@ -193,6 +206,22 @@ impl Outputs {
     /// Writes what every output writes at the end.
     pub fn finish(&mut self, sim: &Simulation) -> Result<(), IoError> {
         self.list.iter_mut().try_for_each(|o| o.finish(sim))
+    }
+
+    /// Puts each output's state under `into`, by position and name.
+    pub fn save(&self, into: &mut Saver) {
+        for (i, o) in self.list.iter().enumerate() {
+            o.save(&mut into.section(&format!("{i}_{}", o.name())));
+        }
+    }
+
+    /// Opens every output in `out` to go on from a checkpoint (see [`Output::resume`]).
+    pub fn resume(&mut self, sim: &Simulation, out: &Path, from: &Restorer) -> Result<(), IoError> {
+        for (i, o) in self.list.iter_mut().enumerate() {
+            let section = from.section(&format!("{i}_{}", o.name()));
+            o.resume(sim, out, &section)?;
+        }
+        Ok(())
     }
 
     /// Frames written so far (of the output that wrote most).

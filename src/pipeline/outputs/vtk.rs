@@ -9,6 +9,7 @@ use super::frame::{vortex_sets, Frame};
 use super::{Kind, Output, OutputSpec, RunFile};
 use crate::io::{write_grid_vtk, write_particles_vtk, IoError, PvdSeries, VtkOptions};
 use crate::pipeline::Simulation;
+use crate::state::{Restorer, Saver};
 use crate::Real;
 
 /// The stem of the fine smoke's series.
@@ -168,6 +169,34 @@ impl Output for VtkFrames {
             .iter()
             .filter(|s| matches!(s.content, Content::Particles | Content::Grid));
         media.map(|s| s.count).max().unwrap_or(0)
+    }
+
+    /// Each series' frame times: its files are numbered in order.
+    fn save(&self, into: &mut Saver) {
+        for s in &self.series {
+            let times: Vec<Real> = s.pvd.iter().flat_map(|p| p.entries()).map(|e| e.0).collect();
+            into.reals(&s.stem, &times);
+        }
+    }
+
+    /// Each series goes on numbering from its checkpoint's count, its `.pvd` listing the frames
+    /// written before it (any written after the checkpoint are overwritten as the run catches
+    /// up).
+    fn resume(&mut self, _sim: &Simulation, out: &Path, from: &Restorer) -> Result<(), IoError> {
+        self.out = out.to_path_buf();
+        for s in &mut self.series {
+            let times = from
+                .reals(&s.stem)
+                .map_err(|e| IoError::invalid(out, e.to_string()))?;
+            let entries: Vec<(Real, String)> = times
+                .iter()
+                .enumerate()
+                .map(|(k, &t)| (t, format!("{}_{k:06}.{}", s.stem, s.ext)))
+                .collect();
+            s.count = entries.len();
+            s.pvd = Some(PvdSeries::resumed(&out.join(format!("{}.pvd", s.stem)), entries));
+        }
+        Ok(())
     }
 }
 

@@ -222,6 +222,14 @@ impl Stage for GridTurbulence {
         "turbulence"
     }
 
+    fn save(&self, into: &mut crate::state::Saver) {
+        self.common.save(into);
+    }
+
+    fn restore(&mut self, from: &crate::state::Restorer) -> Result<(), crate::state::StateError> {
+        self.common.restore(from)
+    }
+
     fn describe(&self, sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         let fine_smoke = sim
             .grid

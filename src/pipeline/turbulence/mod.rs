@@ -25,6 +25,8 @@ use ndarray::Array3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::state::{Persist, Restorer, Saver, StateError};
+
 use super::outputs::Kind;
 use super::stages::{AddedColumns, StepRecord};
 use super::RunError;
@@ -200,6 +202,32 @@ struct Resolution {
     on_particles: bool,
 }
 
+/// The boundary-layer field on the grid's cells (on particles it rides on the fluid, saved
+/// with it) and the vortex particles.
+impl Persist for Turbulence {
+    fn save(&self, into: &mut Saver) {
+        if let Some(abl) = &self.abl {
+            let mut s = into.section("abl");
+            for (a, f) in abl.iter().enumerate() {
+                s.reals(AXES[a], f.as_slice().expect("fields are contiguous"));
+            }
+        }
+        self.vortices.save(&mut into.section("vortices"));
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        if let Some(abl) = self.abl.as_mut() {
+            let s = from.section("abl");
+            for (a, f) in abl.iter_mut().enumerate() {
+                s.reals_into(AXES[a], f.as_slice_mut().expect("fields are contiguous"))?;
+            }
+        }
+        self.vortices.restore(&from.section("vortices"))
+    }
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
 impl Common {
     /// Opens every database of `settings` (checking it belongs to its obstacle in `shapes`) for
     /// a solver of resolution `res` among `bodies`.
@@ -242,6 +270,17 @@ impl Common {
             thickness: res.thickness,
             dissipation,
         })
+    }
+
+    /// The seeding's and the dynamics' generators: what a stage carries between steps.
+    fn save(&self, into: &mut Saver) {
+        into.rng("seeding_rng", &self.rng);
+        self.dynamics.save(&mut into.section("dynamics"));
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        self.rng = from.rng("seeding_rng")?;
+        self.dynamics.restore(&from.section("dynamics"))
     }
 
     /// The factor on omega_pre that gives the wall-attached layer's vorticity, 1/m: the gain

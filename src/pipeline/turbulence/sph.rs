@@ -235,6 +235,14 @@ impl Stage for SphTurbulence {
         "turbulence"
     }
 
+    fn save(&self, into: &mut crate::state::Saver) {
+        self.common.save(into);
+    }
+
+    fn restore(&mut self, from: &crate::state::Restorer) -> Result<(), crate::state::StateError> {
+        self.common.restore(from)
+    }
+
     fn describe(&self, _sim: &Simulation) -> (String, Vec<(&'static str, String)>) {
         let (headline, [wall, seeding, dynamics]) = self.common.describe("spacings");
         (

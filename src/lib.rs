@@ -28,8 +28,8 @@ pub mod refine;
 pub mod scene;
 pub mod simd;
 pub mod spatial;
-pub mod state;
 pub mod sph;
+pub mod state;
 pub mod stepping;
 pub mod vortex;
 

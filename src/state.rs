@@ -175,7 +175,10 @@ impl Saver<'_> {
         let pos = rng.get_word_pos();
         let mut s = self.section(name);
         s.bytes("seed", &rng.get_seed());
-        s.u64s("stream_pos", &[rng.get_stream(), pos as u64, (pos >> 64) as u64]);
+        s.u64s(
+            "stream_pos",
+            &[rng.get_stream(), pos as u64, (pos >> 64) as u64],
+        );
     }
 }
 
@@ -243,7 +246,11 @@ impl Restorer<'_> {
             Ok(v)
         } else {
             let path = join(&self.prefix, name);
-            Err(Self::mismatch(path, &Values::F64(v), format!("{n} f64 values")))
+            Err(Self::mismatch(
+                path,
+                &Values::F64(v),
+                format!("{n} f64 values"),
+            ))
         }
     }
 
@@ -257,11 +264,33 @@ impl Restorer<'_> {
         Ok(self.reals_n(name, 1)?[0])
     }
 
+    /// Exactly `n` vectors (per-particle fields of a part whose count another entry gave).
+    pub fn vec3s_n(&self, name: &str, n: usize) -> Result<Vec<Vec3>, StateError> {
+        let v = self.reals_n(name, 3 * n)?;
+        Ok(v.chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect())
+    }
+
+    /// The error for the entry `name`, which is there but holds what the part cannot take (an
+    /// index out of range, a count that disagrees with another entry's).
+    pub fn invalid(&self, name: &str, found: String, expected: String) -> StateError {
+        StateError::Mismatch {
+            name: join(&self.prefix, name),
+            found,
+            expected,
+        }
+    }
+
     pub fn vec3s(&self, name: &str) -> Result<Vec<Vec3>, StateError> {
         let v = self.reals(name)?;
         if v.len() % 3 != 0 {
             let path = join(&self.prefix, name);
-            return Err(Self::mismatch(path, &Values::F64(v), "a multiple of 3".into()));
+            return Err(Self::mismatch(
+                path,
+                &Values::F64(v),
+                "a multiple of 3".into(),
+            ));
         }
         Ok(v.chunks_exact(3)
             .map(|c| Vec3::new(c[0], c[1], c[2]))
@@ -357,7 +386,10 @@ mod tests {
         let _: u64 = rng.random();
         {
             let mut s = state.section("sph");
-            s.vec3s("x", &[Vec3::new(1.0, 2.0, 3.0), Vec3::new(-0.5, 0.25, 1e-300)]);
+            s.vec3s(
+                "x",
+                &[Vec3::new(1.0, 2.0, 3.0), Vec3::new(-0.5, 0.25, 1e-300)],
+            );
             s.section("open").u64("emitted", 7);
             s.flag("on", true);
             s.rng("rng", &rng);

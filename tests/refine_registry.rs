@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use eddy::pipeline::{Pipeline, Plan};
 use eddy::refine::registry::{self, Method, MethodParams, Range};
 use eddy::refine::{StepContext, StepHook};
+use eddy::state::{Persist, Restorer, Saver, StateError};
 use eddy::{Real, Vec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -32,6 +33,15 @@ impl MethodParams for KickParams {
 }
 
 struct Kick(Real);
+
+/// The kick carries nothing from one step to the next.
+impl Persist for Kick {
+    fn save(&self, _into: &mut Saver) {}
+
+    fn restore(&mut self, _from: &Restorer) -> Result<(), StateError> {
+        Ok(())
+    }
+}
 
 impl StepHook for Kick {
     fn name(&self) -> &'static str {

@@ -7,6 +7,7 @@
 use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::sph::operators::WallField;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -53,6 +54,15 @@ pub struct Confinement {
 impl Confinement {
     pub fn new(epsilon: Real, walls: bool) -> Self {
         Self { epsilon, walls }
+    }
+}
+
+/// Confinement reads only the step's velocity: nothing carries over.
+impl Persist for Confinement {
+    fn save(&self, _into: &mut Saver) {}
+
+    fn restore(&mut self, _from: &Restorer) -> Result<(), StateError> {
+        Ok(())
     }
 }
 

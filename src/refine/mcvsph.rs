@@ -39,6 +39,7 @@ use super::registry::{Method, MethodParams, Range};
 use super::{add_scaled, StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -187,6 +188,26 @@ pub fn sample_indices(n: usize, count: usize, seed: u64) -> Vec<usize> {
     rand::seq::index::sample(&mut rng, n, count).into_vec()
 }
 
+/// Which particles carry a vortex particle and the generator that draws those of entering
+/// particles. The vorticity, stretching and reach are taken afresh before the step reads
+/// them; the rest are one step's buffers.
+impl Persist for Mcvsph {
+    fn save(&self, into: &mut Saver) {
+        into.bytes(
+            "sampled",
+            &self.sampled.iter().map(|&s| s.into()).collect::<Vec<_>>(),
+        );
+        into.rng("rng", &self.rng);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let sampled = from.bytes("sampled")?.iter().map(|&s| s != 0).collect();
+        self.rng = from.rng("rng")?;
+        self.sampled = sampled;
+        Ok(())
+    }
+}
+
 impl StepHook for Mcvsph {
     fn name(&self) -> &'static str {
         "refine"
@@ -222,6 +243,10 @@ impl StepHook for Mcvsph {
             .map(|_| rng.random::<Real>() < *fraction)
             .collect();
         self.sampled.extend(drawn);
+    }
+
+    fn particles(&self) -> Option<usize> {
+        Some(self.sampled.len())
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

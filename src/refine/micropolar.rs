@@ -14,6 +14,7 @@ use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::WallField;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -87,6 +88,18 @@ impl Micropolar {
     }
 }
 
+/// The angular velocities, which the next step relaxes from.
+impl Persist for Micropolar {
+    fn save(&self, into: &mut Saver) {
+        into.vec3s("omega", &self.omega);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        self.omega = from.vec3s("omega")?;
+        Ok(())
+    }
+}
+
 impl StepHook for Micropolar {
     fn name(&self) -> &'static str {
         "refine"
@@ -131,6 +144,10 @@ impl StepHook for Micropolar {
             .par_iter_mut()
             .zip(curl_w.par_iter())
             .for_each(|(a, c)| *a += coupling * c);
+    }
+
+    fn particles(&self) -> Option<usize> {
+        Some(self.omega.len())
     }
 
     fn rotational_energy(&self, mass: Real) -> Real {

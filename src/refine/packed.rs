@@ -21,6 +21,7 @@
 
 use super::lanes::{CrossSum, F4};
 use crate::sph::operators::{Operators, WallField};
+use crate::state::{Restorer, Saver, StateError};
 use crate::Mat3;
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -55,6 +56,23 @@ impl Field {
     /// Reorders the field as the fluid was reordered (`perm[k]` is the old index at k).
     pub fn permute(&mut self, perm: &[u32]) {
         crate::spatial::permute(&mut self.0, perm);
+    }
+
+    /// Saves the lanes exactly (f32 widens to f64 without rounding): the vectors as `name`,
+    /// the volumes they were packed with as `name_volume`.
+    pub fn save(&self, into: &mut Saver, name: &str) {
+        let vectors: Vec<Vec3> = self.0.iter().map(|f| f.vec()).collect();
+        let volumes: Vec<Real> = self.0.iter().map(|f| f.to_array()[3].into()).collect();
+        into.vec3s(name, &vectors);
+        into.reals(&format!("{name}_volume"), &volumes);
+    }
+
+    /// The field [`Self::save`] saved as `name`.
+    pub fn restore(from: &Restorer, name: &str) -> Result<Self, StateError> {
+        let vectors = from.vec3s(name)?;
+        let volumes = from.reals_n(&format!("{name}_volume"), vectors.len())?;
+        let lanes = vectors.iter().zip(&volumes);
+        Ok(Self(lanes.map(|(v, &w)| F4::from_vec(v, w)).collect()))
     }
 
     /// Follows the fluid's open boundaries (see [`crate::spatial::resize`]): new particles

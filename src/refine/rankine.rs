@@ -36,6 +36,7 @@ use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -99,6 +100,19 @@ impl Rankine {
     }
 }
 
+/// omega^(n-1), which the next step's loss is measured against (empty before the first
+/// step); the rest are one step's buffers.
+impl Persist for Rankine {
+    fn save(&self, into: &mut Saver) {
+        into.vec3s("previous", &self.previous);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        self.previous = from.vec3s("previous")?;
+        Ok(())
+    }
+}
+
 impl StepHook for Rankine {
     fn name(&self) -> &'static str {
         "refine"
@@ -126,6 +140,10 @@ impl StepHook for Rankine {
 
     fn resize(&mut self, keep: &[bool], added: usize) {
         resize(&mut self.previous, keep, added, Vec3::zeros());
+    }
+
+    fn particles(&self) -> Option<usize> {
+        (!self.previous.is_empty()).then_some(self.previous.len())
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

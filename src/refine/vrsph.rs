@@ -41,6 +41,7 @@ use super::registry::{Method, MethodParams, Range};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -105,6 +106,22 @@ impl Vrsph {
     }
 }
 
+/// zeta^n and its stretching, which the next step's ideal vorticity starts from (empty
+/// before the first step); the rest are one step's buffers.
+impl Persist for Vrsph {
+    fn save(&self, into: &mut Saver) {
+        self.zeta.save(into, "zeta");
+        into.vec3s("stretch", &self.stretch);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let zeta = Field::restore(from, "zeta")?;
+        self.stretch = from.vec3s_n("stretch", zeta.len())?;
+        self.zeta = zeta;
+        Ok(())
+    }
+}
+
 impl StepHook for Vrsph {
     fn name(&self) -> &'static str {
         "refine"
@@ -134,6 +151,10 @@ impl StepHook for Vrsph {
     fn resize(&mut self, keep: &[bool], added: usize) {
         self.zeta.resize(keep, added);
         resize(&mut self.stretch, keep, added, Vec3::zeros());
+    }
+
+    fn particles(&self) -> Option<usize> {
+        (!self.zeta.is_empty()).then_some(self.zeta.len())
     }
 
     fn before_advection(&mut self, ctx: &StepContext, v: &mut [Vec3], _accel: &mut [Vec3]) {

@@ -36,6 +36,7 @@ use super::fluid::{lattice_kernel_sum, plane_kernel_sum_at};
 use super::kernel::CubicSpline;
 use super::neighbors::{cell_order_and_codes, permute, CellGrid, NeighborLists};
 use crate::geometry::RigidBody;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
@@ -199,5 +200,44 @@ impl BoundaryParticles {
             + self.volume.capacity() * std::mem::size_of::<Real>()
             + self.body.capacity() * std::mem::size_of::<u32>()
             + self.grid.memory_bytes()
+    }
+}
+
+/// The samples in their current order. Each re-sort after a body moved breaks ties within a
+/// cell by the order before it, so the order after many steps is not that of samples placed
+/// afresh at the same time: it is stored, with every per-sample array. The solver saves this
+/// only while a body moves (still samples stay as sampled) and re-places the samples after
+/// restoring them, which rebuilds the grid (a re-sort of sorted samples keeps their order).
+impl Persist for BoundaryParticles {
+    fn save(&self, into: &mut Saver) {
+        into.vec3s("x", &self.x);
+        into.vec3s("v", &self.v);
+        into.reals("volume", &self.volume);
+        into.u64s(
+            "body",
+            &self.body.iter().map(|&b| b.into()).collect::<Vec<_>>(),
+        );
+        into.vec3s("local", &self.local);
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let n = self.len();
+        let bodies = self.body.iter().max().map_or(0, |&b| u64::from(b) + 1);
+        let body = from.u64s("body")?;
+        if body.len() != n {
+            let found = format!("{} u64 values", body.len());
+            return Err(from.invalid("body", found, format!("{n} u64 values")));
+        }
+        if let Some(b) = body.iter().find(|&&b| b >= bodies) {
+            let expected = format!("body indices below {bodies}");
+            return Err(from.invalid("body", format!("body index {b}"), expected));
+        }
+        let x = from.vec3s_n("x", n)?;
+        let v = from.vec3s_n("v", n)?;
+        let volume = from.reals_n("volume", n)?;
+        let local = from.vec3s_n("local", n)?;
+        (self.x, self.v, self.volume, self.local) = (x, v, volume, local);
+        self.body = body.into_iter().map(|b| b as u32).collect();
+        Ok(())
     }
 }

@@ -17,6 +17,7 @@
 //! exponentially, through any such factor within a few steps. A scene with no source at all (no
 //! gravity, nothing moving) has no bound.
 
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// How many times faster than its fastest source and a fall across the domain the fluid may
@@ -64,6 +65,22 @@ impl EnergyBound {
     /// none).
     pub fn exceeded(bound: Real, energy: Real) -> bool {
         bound > 0.0 && energy > bound
+    }
+}
+
+/// The bound once fixed (it took in the first step's fastest particle); the sources are the
+/// scene's.
+impl Persist for EnergyBound {
+    fn save(&self, into: &mut Saver) {
+        into.reals("bound", self.bound.as_slice());
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        self.bound = match from.reals("bound")?.as_slice() {
+            [] => None,
+            _ => Some(from.real("bound")?),
+        };
+        Ok(())
     }
 }
 

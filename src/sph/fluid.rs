@@ -3,6 +3,7 @@
 use super::kernel::CubicSpline;
 use super::neighbors::{permute, resize};
 use super::params::FluidBlock;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// Fluid particle state. All particles share one mass.
@@ -142,6 +143,50 @@ impl FluidParticles {
                 .iter()
                 .map(|(_, f)| f.capacity() * std::mem::size_of::<Vec3>())
                 .sum::<usize>()
+    }
+}
+
+/// The particles in their current order (the neighbour sums add in it), their count set by
+/// `x`. Not stored: the density, recomputed by the neighbourhood update from the positions;
+/// the mass and rest density, the scene's. The carried fields are restored by name into those
+/// the fresh fluid was given by its stages.
+impl Persist for FluidParticles {
+    fn save(&self, into: &mut Saver) {
+        into.vec3s("x", &self.x);
+        into.vec3s("v", &self.v);
+        into.reals("pressure", &self.pressure);
+        into.reals("kappa", &self.kappa);
+        into.reals("kappa_v", &self.kappa_v);
+        let mut carried = into.section("carried");
+        for (name, field) in &self.carried {
+            carried.vec3s(name, field);
+        }
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let x = from.vec3s("x")?;
+        let n = x.len();
+        let v = from.vec3s_n("v", n)?;
+        let pressure = from.reals_n("pressure", n)?;
+        let kappa = from.reals_n("kappa", n)?;
+        let kappa_v = from.reals_n("kappa_v", n)?;
+        let from_carried = from.section("carried");
+        let carried = self
+            .carried
+            .iter()
+            .map(|(name, _)| Ok((*name, from_carried.vec3s_n(name, n)?)))
+            .collect::<Result<_, StateError>>()?;
+        *self = Self {
+            x,
+            v,
+            density: vec![self.rest_density; n],
+            pressure,
+            kappa,
+            kappa_v,
+            carried,
+            ..*self
+        };
+        Ok(())
     }
 }
 

@@ -9,9 +9,12 @@
 //!   velocity there is v^n of the papers.
 //! - [`StepHook::after_pressure`], after the pressure solve and before positions move.
 //!
-//! Hooks that keep per-particle state are told of every reordering of the fluid.
+//! Hooks that keep per-particle state are told of every reordering of the fluid. Every hook
+//! says what it carries from one step to the next ([`Persist`]), so that a checkpoint holds
+//! it: one that carries nothing saves nothing.
 
 use super::operators::Operators;
+use crate::state::Persist;
 use crate::{Real, Vec3};
 
 /// What a hook may read during a step.
@@ -26,8 +29,9 @@ pub struct StepContext<'a> {
     pub spacing: Real,
 }
 
-/// Work attached to the SPH step.
-pub trait StepHook: Send {
+/// Work attached to the SPH step. [`Persist::restore`] is called between steps on the hook
+/// built for the same scene, after the fluid's particles are restored.
+pub trait StepHook: Send + Persist {
     /// Short name, for the plan and the stage trace.
     fn name(&self) -> &'static str;
 
@@ -57,6 +61,12 @@ pub trait StepHook: Send {
     /// Rotational kinetic energy the hook carries beyond the particles' linear motion, J.
     fn rotational_energy(&self, _mass: Real) -> Real {
         0.0
+    }
+
+    /// The count of fluid particles its per-particle state is for (`None` without any, or
+    /// before it is made): the solver checks a restored hook against its fluid with it.
+    fn particles(&self) -> Option<usize> {
+        None
     }
 
     /// Per-particle fields the hook adds to the output frames.

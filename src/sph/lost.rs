@@ -13,6 +13,7 @@
 //! tunnelled through a wall into open space (the lost share stops a run whose walls leak).
 
 use super::params::DomainSide;
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// The lost particles so far: the count through each side and where the last one was.
@@ -48,6 +49,28 @@ impl LostParticles {
             .map(|s| format!("{} through {}", self.by_side[s.index()], s.name()))
             .collect::<Vec<_>>()
             .join(", ")
+    }
+}
+
+/// The counts (the lost-share stop reads them) and the last position (its message).
+impl Persist for LostParticles {
+    fn save(&self, into: &mut Saver) {
+        into.u64s("by_side", &self.by_side);
+        into.reals("last", self.last.as_ref().map_or(&[][..], |x| x.as_slice()));
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let counts = from.u64s("by_side")?;
+        let by_side = counts.as_slice().try_into().map_err(|_| {
+            let found = format!("{} u64 values", counts.len());
+            from.invalid("by_side", found, "6 u64 values, one a side".into())
+        })?;
+        let last = match from.reals("last")?.as_slice() {
+            [] => None,
+            _ => Some(from.vec3s_n("last", 1)?[0]),
+        };
+        *self = Self { by_side, last };
+        Ok(())
     }
 }
 

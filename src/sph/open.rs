@@ -21,6 +21,7 @@ use rayon::prelude::*;
 
 use super::fluid::FluidParticles;
 use super::params::{Inflow, InflowShape, Outflow};
+use crate::state::{Persist, Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// Depth of an inflow's buffer, in spacings: one more than the kernel support.
@@ -273,5 +274,25 @@ impl OpenBoundaries {
                 .map(|(o, _)| format!("outflow on {}", o.side.name())),
         );
         parts.join(", ")
+    }
+}
+
+/// Each emitter's phase: how far its sites' last particles have moved in. The sites, planes
+/// and outflows are the scene's.
+impl Persist for OpenBoundaries {
+    fn save(&self, into: &mut Saver) {
+        for (k, e) in self.emitters.iter().enumerate() {
+            into.reals(&format!("emitter_{k}"), &e.last);
+        }
+    }
+
+    fn restore(&mut self, from: &Restorer) -> Result<(), StateError> {
+        let last = (0..self.emitters.len())
+            .map(|k| from.reals_n(&format!("emitter_{k}"), self.emitters[k].sites.len()))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (e, last) in self.emitters.iter_mut().zip(last) {
+            e.last = last;
+        }
+        Ok(())
     }
 }

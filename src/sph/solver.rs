@@ -31,6 +31,8 @@ use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
+mod persist;
+
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
 pub enum Instability {

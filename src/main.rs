@@ -338,7 +338,11 @@ fn run_one(scene: PathBuf, mut options: RunOptions, plan: bool) -> anyhow::Resul
     }
     eprintln!(
         "eddy: {} {} -> {}",
-        if options.resume { "resuming" } else { "running" },
+        if options.resume {
+            "resuming"
+        } else {
+            "running"
+        },
         scene.display(),
         run::output_dir(&resolved, &options).display()
     );

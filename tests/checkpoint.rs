@@ -82,7 +82,10 @@ fn stopped_and_resumed_equals_uninterrupted(scene: &Scene, at: u64) {
             copy_dir(&a, &b);
         }
     }
-    assert!(run.pipeline.sim.steps() > at + 2, "the run ends after the checkpoint");
+    assert!(
+        run.pipeline.sim.steps() > at + 2,
+        "the run ends after the checkpoint"
+    );
     let end_a = run.pipeline.save_state();
     run.finish().unwrap();
     for csv in ["metrics.csv", "probes.csv"] {
@@ -198,7 +201,9 @@ fn a_checkpoint_of_another_scene_is_refused_with_the_difference() {
     )
     .unwrap();
     let _serial = common::hdf5_or_child();
-    let e = Run::resume(&other, &options(&out, true)).err().expect("refused");
+    let e = Run::resume(&other, &options(&out, true))
+        .err()
+        .expect("refused");
     let text = e.to_string();
     assert!(
         text.contains("another scene") && text.contains("0.002"),
@@ -287,4 +292,97 @@ fn sigterm_leaves_a_checkpoint_that_resumes_to_the_same_end() {
         without_timings(&stopped.join("metrics.csv"))
     );
     assert_eq!(last_row(&whole), last_row(&stopped));
+}
+
+fn shipped(name: &str, overrides: &[&str]) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    eddy::scene::load(&path, &overrides).expect("the shipped scene loads")
+}
+
+/// The stream past a ball (an inflow, an outflow) with boundary layers on the ball from a
+/// synthetic database, VRSPH, and the statistics on their bins.
+#[test]
+fn an_sph_run_with_open_boundaries_a_refinement_and_statistics_resumes_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = common::ball_database(dir.path(), 0.08);
+    let abl = format!("obstacles.3.abl.database={:?}", db.display().to_string());
+    let s = shipped(
+        "abl_sph_stream_ball.toml",
+        &[
+            &abl,
+            "fluid.spacing=0.04",
+            "time.end=0.12",
+            "output.interval=0.03",
+            "turbulence.c_p=200.0",
+            "refinement.method=\"vrsph\"",
+            "statistics.from=0.02",
+            "statistics.batches=2",
+        ],
+    );
+    stopped_and_resumed_equals_uninterrupted(&s, 12);
+}
+
+/// Air over a tank of water: the grid, the particles and the exchange between them.
+#[test]
+fn a_coupled_run_with_statistics_resumes_bit_for_bit() {
+    let s = shipped(
+        "coupled_tank_and_plume.toml",
+        &[
+            "fluid.spacing=0.04",
+            "grid.resolution=[16,16,8]",
+            "time.end=0.15",
+            "output.interval=0.05",
+            "statistics.from=0.0",
+        ],
+    );
+    stopped_and_resumed_equals_uninterrupted(&s, 5);
+}
+
+/// `kill -9` at any point of a run that writes a checkpoint every step or two leaves, whenever
+/// there is one, a checkpoint that reads whole and resumes: each is written under a temporary
+/// name and renamed.
+#[test]
+fn a_kill_during_a_checkpoint_write_keeps_the_previous_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = common::ball_database(dir.path(), 0.2);
+    let file = dir.path().join("channel.toml");
+    let mut s = grid_scene(&db);
+    s.time.end = Some(2.0);
+    s.output.checkpoint_interval = Some(0.01);
+    s.output.vtk = false;
+    std::fs::write(&file, s.to_toml()).unwrap();
+    let _serial = common::hdf5_or_child();
+    let mut resumed = 0;
+    for k in 0..8u64 {
+        let out = dir.path().join(format!("run{k}"));
+        let mut child = eddy()
+            .args(["run", "--out"])
+            .arg(&out)
+            .arg(&file)
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(150 + 61 * k));
+        let _ = child.kill();
+        child.wait().unwrap();
+        if !out.join("checkpoint.h5").exists() {
+            continue;
+        }
+        let stored = eddy::io::read_checkpoint(&out.join("checkpoint.h5"))
+            .expect("the last whole checkpoint reads after a kill");
+        let t = stored.number("time").expect("its time");
+        let status = eddy()
+            .args(["resume", "--until"])
+            .arg((t + 0.02).to_string())
+            .arg(&out)
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success(), "resuming after kill {k} at t = {t}");
+        resumed += 1;
+    }
+    assert!(resumed >= 4, "{resumed} of 8 kills left a checkpoint");
 }

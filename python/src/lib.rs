@@ -217,6 +217,31 @@ impl Simulation {
         Ok(Simulation { run, dt: 0.0 })
     }
 
+    /// Goes on with the run in `out` (default: the scene's output folder) from its
+    /// checkpoint, as `eddy resume` does: the scene must be the checkpoint's but for
+    /// `time.end`, `time.steps` and the `[output]` keys; frames and rows go on from it.
+    #[staticmethod]
+    #[pyo3(signature = (scene, out = None))]
+    fn resume(py: Python<'_>, scene: &Scene, out: Option<PathBuf>) -> PyResult<Self> {
+        let options = RunOptions {
+            out,
+            resume: true,
+            ..RunOptions::default()
+        };
+        let inner = &scene.inner;
+        let run = py
+            .detach(|| Run::resume(inner, &options))
+            .map_err(run_error)?;
+        Ok(Simulation { run, dt: 0.0 })
+    }
+
+    /// Writes the whole state between steps to `checkpoint.h5` in the output folder (what
+    /// `Simulation.resume` and `eddy resume` go on from) and returns its path.
+    fn save(&self, py: Python<'_>) -> PyResult<PathBuf> {
+        let run = &self.run;
+        py.detach(|| run.checkpoint()).map_err(run_error)
+    }
+
     /// The stages each step runs and what is written, as `eddy run --plan` prints them.
     fn plan(&self) -> String {
         self.run.plan().to_string()

@@ -69,6 +69,27 @@ def test_a_run_from_python_equals_the_cli_bit_for_bit(tmp_path, scene, overrides
         p.name for p in (tmp_path / "cli").iterdir())
 
 
+def test_a_saved_run_resumed_from_python_ends_as_the_run_that_never_stopped(tmp_path):
+    scene = eddy.Scene.load(SCENES / "dam_break.toml", overrides={"time.end": 0.05, "output.interval": 0.01})
+    whole = eddy.Simulation(scene, out=tmp_path / "whole")
+    whole.run()
+    stopped = eddy.Simulation(scene, out=tmp_path / "stopped")
+    stopped.run(steps=7)
+    path = stopped.save()
+    assert path == tmp_path / "stopped" / "checkpoint.h5" and path.exists()
+    del stopped
+    resumed = eddy.Simulation.resume(scene, out=tmp_path / "stopped")
+    assert resumed.steps == 7
+    resumed.run()
+    assert resumed.steps == whole.steps
+    assert np.array_equal(resumed.position(), whole.position())
+    assert np.array_equal(resumed.velocity(), whole.velocity())
+    assert rows(tmp_path / "stopped" / "metrics.csv") == rows(tmp_path / "whole" / "metrics.csv")
+    other = eddy.Scene.load(SCENES / "dam_break.toml", overrides={"fluid.spacing": 0.05})
+    with pytest.raises(RuntimeError, match="another scene"):
+        eddy.Simulation.resume(other, out=tmp_path / "stopped")
+
+
 def test_particle_arrays_have_the_documented_shapes_and_units(tmp_path):
     sim = eddy.Simulation(eddy.Scene.load(SCENES / "dam_break.toml", overrides={"time.end": 0.02}),
                           out=tmp_path)

@@ -51,7 +51,9 @@ fn group_of<'a>(root: &Group, path: &'a str) -> Result<(Group, &'a str), Failure
     for part in dirs.split('/').filter(|p| !p.is_empty()) {
         group = match group.group(part) {
             Ok(g) => g,
-            Err(_) => ctx(group.create_group(part), || format!("creating group {part:?}"))?,
+            Err(_) => ctx(group.create_group(part), || {
+                format!("creating group {part:?}")
+            })?,
         };
     }
     Ok((group, leaf))

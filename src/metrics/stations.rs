@@ -254,7 +254,11 @@ impl Persist for Station {
         }
         self.batches = values
             .chunks_exact(per_batch)
-            .map(|b| b.chunks_exact(4).map(|v| ([v[0], v[1], v[2]], v[3])).collect())
+            .map(|b| {
+                b.chunks_exact(4)
+                    .map(|v| ([v[0], v[1], v[2]], v[3]))
+                    .collect()
+            })
             .collect();
         Ok(())
     }

@@ -330,7 +330,10 @@ pub(crate) fn save_moments(into: &mut Saver, name: &str, cells: &[CellMoments]) 
         })
         .collect();
     s.reals("reals", &reals);
-    s.u64s("samples", &cells.iter().map(|c| c.samples).collect::<Vec<_>>());
+    s.u64s(
+        "samples",
+        &cells.iter().map(|c| c.samples).collect::<Vec<_>>(),
+    );
 }
 
 /// Unpacks [`save_moments`] into `cells`, whose length the lattice fixes.
@@ -349,7 +352,11 @@ pub(crate) fn restore_moments(
             expected: format!("{}, one per cell", cells.len()),
         });
     }
-    for ((c, v), &n) in cells.iter_mut().zip(reals.chunks_exact(REALS_PER_CELL)).zip(&samples) {
+    for ((c, v), &n) in cells
+        .iter_mut()
+        .zip(reals.chunks_exact(REALS_PER_CELL))
+        .zip(&samples)
+    {
         *c = CellMoments {
             weight: v[0],
             samples: n,

@@ -80,6 +80,9 @@ impl Pipeline {
             if let Some(grid) = &sim.grid {
                 grid.save(&mut s.section("grid"));
             }
+            if let Some(sph) = &sim.sph {
+                sph.save(&mut s.section("sph"));
+            }
             if let Some(t) = &sim.grid_turbulence {
                 t.save(&mut s.section("grid_turbulence"));
             }
@@ -112,6 +115,9 @@ impl Pipeline {
         sim.steps = s.u64("steps")?;
         if let Some(grid) = sim.grid.as_mut() {
             grid.restore(&s.section("grid"))?;
+        }
+        if let Some(sph) = sim.sph.as_mut() {
+            sph.restore(&s.section("sph"))?;
         }
         if let Some(t) = sim.grid_turbulence.as_mut() {
             t.restore(&s.section("grid_turbulence"))?;
@@ -155,8 +161,7 @@ impl Pipeline {
                 csv.go_on_from(kept)?;
             }
         }
-        self.outputs
-            .resume(&self.sim, out, &state.read("outputs"))
+        self.outputs.resume(&self.sim, out, &state.read("outputs"))
     }
 }
 

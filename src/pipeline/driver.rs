@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::build::Pipeline;
 use super::checkpoint::{self, CheckpointError};
-use super::outputs::{remove_earlier_outputs, CHECKPOINT_FILE, SCENE_FILE};
+use super::outputs::{remove_earlier_outputs, Outputs, CHECKPOINT_FILE, SCENE_FILE};
 use super::plan::Plan;
 use super::simulation::StepError;
 use super::stages::StepRecord;
@@ -44,7 +44,11 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
     let mut trace = Vec::new();
     while let Some(rec) = run.advance(options.trace.then_some(&mut trace))? {
         update_bar(&bar, &run.end, &run.pipeline, &rec);
-        if options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst)) {
+        if options
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::SeqCst))
+        {
             bar.finish_and_clear();
             run.checkpoint()?;
             let sim = &run.pipeline.sim;
@@ -93,13 +97,12 @@ struct Schedule {
 }
 
 impl Schedule {
-    fn new(scene: &Scene, time: Real) -> Self {
-        let interval = scene.output.checkpoint_interval;
+    fn new(outputs: &Outputs, time: Real) -> Self {
+        let interval = outputs.checkpoint_interval;
         Self {
             interval,
             next: interval.map_or(0, |dt| (time / dt + TIME_EPS).floor() as u64 + 1),
-            every: scene
-                .output
+            every: outputs
                 .checkpoint_every
                 .map(|m| Duration::from_secs_f64(60.0 * m)),
             last: Instant::now(),
@@ -173,9 +176,15 @@ impl Run {
         Ok(Run::assemble(pipeline, scene, out, frame, started))
     }
 
-    fn assemble(pipeline: Pipeline, scene: &Scene, out: PathBuf, frame: u64, started: Instant) -> Self {
+    fn assemble(
+        pipeline: Pipeline,
+        scene: &Scene,
+        out: PathBuf,
+        frame: u64,
+        started: Instant,
+    ) -> Self {
         let plan = Plan::of(&pipeline);
-        let time = pipeline.sim.time();
+        let checkpoints = Schedule::new(&pipeline.outputs, pipeline.sim.time());
         Run {
             pipeline,
             out,
@@ -190,7 +199,7 @@ impl Run {
             plan,
             started,
             scene_key: checkpoint::comparable(scene),
-            checkpoints: Schedule::new(scene, time),
+            checkpoints,
         }
     }
 

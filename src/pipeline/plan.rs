@@ -6,6 +6,7 @@ use std::fmt;
 use super::build::Pipeline;
 use super::footprint::available_memory;
 use super::order::SceneKind;
+use super::outputs::CHECKPOINT_FILE;
 
 /// One stage of a step, with the parts it runs inside.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -41,7 +42,8 @@ impl Plan {
                 }
             })
             .collect();
-        let outputs = p.outputs.describe(&p.sim);
+        let mut outputs = p.outputs.describe(&p.sim);
+        outputs.push(("checkpoint", checkpoint_line(p)));
         let clock = match p.kind {
             SceneKind::Coupled => "one dt for both solvers, the smaller of their stable \
                                         steps; the water and the air exchange momentum across \
@@ -115,4 +117,23 @@ impl fmt::Display for Plan {
         }
         Ok(())
     }
+}
+
+/// The plan's line on checkpoints: when they are written, where, and the state's size now (it
+/// grows with the particles and vortex particles a run adds).
+fn checkpoint_line(p: &Pipeline) -> String {
+    let mut when = Vec::new();
+    if let Some(dt) = p.outputs.checkpoint_interval {
+        when.push(format!("every {dt} s"));
+    }
+    if let Some(m) = p.outputs.checkpoint_every {
+        when.push(format!("every {m} min of wall time"));
+    }
+    when.push("on SIGINT or SIGTERM".into());
+    let mib = p.save_state().bytes() as f64 / (1024.0 * 1024.0);
+    format!(
+        "{CHECKPOINT_FILE} {}, {mib:.1} MiB of state at the start; `eddy resume DIR` goes on \
+         from it",
+        when.join(", ")
+    )
 }

@@ -9,8 +9,8 @@ use super::simulation::{Simulation, StepError};
 use super::stages::{Stage, StepRecord};
 use super::RunError;
 use crate::metrics::stations::StationSpec;
-use crate::state::{Restorer, Saver, StateError};
 use crate::metrics::statistics::{FlowStatistics, Lattice, BYTES_PER_BIN, BYTES_PER_CELL};
+use crate::state::{Restorer, Saver, StateError};
 use crate::{Real, Vec3};
 
 /// What `[statistics]` asks for, resolved by `scene::build`.

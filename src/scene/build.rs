@@ -168,6 +168,8 @@ pub fn output_spec(scene: &Scene) -> OutputSpec {
         ],
         profiles,
         formats: out.formats.clone(),
+        checkpoint_interval: out.checkpoint_interval,
+        checkpoint_every: out.checkpoint_every,
     }
 }
 

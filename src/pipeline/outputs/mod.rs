@@ -16,9 +16,8 @@ use std::path::Path;
 use std::sync::RwLock;
 
 pub use files::{
-    is_run_output, remove_earlier_outputs, Kind, RunFile, CHECKPOINT_FILE, METRICS_FILE, PROBES_FILE,
-    SCENE_FILE,
-    STAGE_FILES,
+    is_run_output, remove_earlier_outputs, Kind, RunFile, CHECKPOINT_FILE, METRICS_FILE,
+    PROBES_FILE, SCENE_FILE, STAGE_FILES,
 };
 pub use frame::Frame;
 pub use profiles::LineProbe;
@@ -49,6 +48,10 @@ pub struct OutputSpec {
     pub profiles: Vec<LineProbe>,
     /// Registered formats asked for by name (`output.formats`).
     pub formats: Vec<String>,
+    /// Simulated time between checkpoints, s (`output.checkpoint_interval`).
+    pub checkpoint_interval: Option<Real>,
+    /// Wall-clock minutes between checkpoints (`output.checkpoint_every`).
+    pub checkpoint_every: Option<Real>,
 }
 
 /// One output of a run: it creates its files when the run opens, writes at every frame time
@@ -167,6 +170,10 @@ pub fn formats() -> Vec<&'static Format> {
 pub struct Outputs {
     /// Simulated time between frames, s.
     pub interval: Real,
+    /// Simulated time between checkpoints, s.
+    pub checkpoint_interval: Option<Real>,
+    /// Wall-clock minutes between checkpoints.
+    pub checkpoint_every: Option<Real>,
     list: Vec<Box<dyn Output>>,
 }
 
@@ -188,6 +195,8 @@ impl Outputs {
         }
         Ok(Self {
             interval: spec.interval,
+            checkpoint_interval: spec.checkpoint_interval,
+            checkpoint_every: spec.checkpoint_every,
             list: all.iter().filter_map(|f| (f.build)(spec, sim)).collect(),
         })
     }

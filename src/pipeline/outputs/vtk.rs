@@ -174,7 +174,12 @@ impl Output for VtkFrames {
     /// Each series' frame times: its files are numbered in order.
     fn save(&self, into: &mut Saver) {
         for s in &self.series {
-            let times: Vec<Real> = s.pvd.iter().flat_map(|p| p.entries()).map(|e| e.0).collect();
+            let times: Vec<Real> = s
+                .pvd
+                .iter()
+                .flat_map(|p| p.entries())
+                .map(|e| e.0)
+                .collect();
             into.reals(&s.stem, &times);
         }
     }
@@ -194,7 +199,10 @@ impl Output for VtkFrames {
                 .map(|(k, &t)| (t, format!("{}_{k:06}.{}", s.stem, s.ext)))
                 .collect();
             s.count = entries.len();
-            s.pvd = Some(PvdSeries::resumed(&out.join(format!("{}.pvd", s.stem)), entries));
+            s.pvd = Some(PvdSeries::resumed(
+                &out.join(format!("{}.pvd", s.stem)),
+                entries,
+            ));
         }
         Ok(())
     }

@@ -386,3 +386,41 @@ fn a_kill_during_a_checkpoint_write_keeps_the_previous_one() {
     }
     assert!(resumed >= 4, "{resumed} of 8 kills left a checkpoint");
 }
+
+/// Checkpoints come at the first step on or after each multiple of
+/// `output.checkpoint_interval`, and after every step when `output.checkpoint_every` has
+/// passed since the last.
+#[test]
+fn checkpoints_follow_their_schedule() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = common::ball_database(dir.path(), 0.2);
+    let mut s = grid_scene(&db);
+    s.output.vtk = false;
+    s.output.checkpoint_interval = Some(0.15);
+    let _serial = common::hdf5_or_child();
+    let out = dir.path().join("by_time");
+    let mut run = Run::start(&s, &options(&out, false)).unwrap();
+    let mut times = Vec::new();
+    while run.advance(None).unwrap().is_some() {
+        let stored = eddy::io::read_checkpoint(&out.join("checkpoint.h5"));
+        if let Some(t) = stored.ok().and_then(|c| c.number("time")) {
+            if times.last() != Some(&t) {
+                times.push(t);
+            }
+        }
+    }
+    assert_eq!(times.len(), 3, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        let due = 0.15 * (k + 1) as f64;
+        assert!(*t >= due - 1e-12 && *t < due + 0.05, "{times:?}");
+    }
+    s.output.checkpoint_interval = None;
+    s.output.checkpoint_every = Some(1e-9);
+    let out = dir.path().join("by_wall");
+    let mut run = Run::start(&s, &options(&out, false)).unwrap();
+    for _ in 0..3 {
+        run.advance(None).unwrap();
+    }
+    let stored = eddy::io::read_checkpoint(&out.join("checkpoint.h5")).unwrap();
+    assert_eq!(stored.number("step"), Some(3.0));
+}

@@ -117,15 +117,17 @@ pub fn read_checkpoint(path: &Path) -> Result<StoredCheckpoint, IoError> {
     let mut attrs = Vec::new();
     for name in file.attr_names().map_err(|e| invalid(e.to_string()))? {
         let attr = file.attr(&name).map_err(|e| invalid(e.to_string()))?;
-        let value = if let Ok(s) = attr.read_scalar::<VarLenUnicode>() {
-            AttrValue::Str(s.as_str().to_owned())
-        } else if let Ok(i) = attr.read_scalar::<i64>() {
-            AttrValue::Int(i)
-        } else if let Ok(x) = attr.read_scalar::<f64>() {
-            AttrValue::Real(x)
-        } else {
-            continue;
-        };
+        // By the stored type: HDF5 would convert a float to an integer when asked.
+        let kind = attr.dtype().and_then(|t| t.to_descriptor());
+        let value = match kind {
+            Ok(TypeDescriptor::VarLenUnicode) => attr
+                .read_scalar::<VarLenUnicode>()
+                .map(|s| AttrValue::Str(s.as_str().to_owned())),
+            Ok(TypeDescriptor::Integer(_)) => attr.read_scalar::<i64>().map(AttrValue::Int),
+            Ok(TypeDescriptor::Float(_)) => attr.read_scalar::<f64>().map(AttrValue::Real),
+            _ => continue,
+        }
+        .map_err(|e| invalid(format!("root attribute {name:?}: {e}")))?;
         attrs.push((name, value));
     }
     let stored = StoredCheckpoint {
@@ -209,6 +211,8 @@ mod tests {
         assert_eq!(back.state, state);
         assert_eq!(back.text("scene"), Some("name = 'x'"));
         assert_eq!(back.number("format_version"), Some(1.0));
+        write_checkpoint(&path, &[("time", AttrValue::Real(0.15))], &state).unwrap();
+        assert_eq!(read_checkpoint(&path).unwrap().number("time"), Some(0.15));
     }
 
     #[test]

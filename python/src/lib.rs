@@ -237,9 +237,10 @@ impl Simulation {
 
     /// Writes the whole state between steps to `checkpoint.h5` in the output folder (what
     /// `Simulation.resume` and `eddy resume` go on from) and returns its path.
-    fn save(&self, py: Python<'_>) -> PyResult<PathBuf> {
-        let run = &self.run;
-        py.detach(|| run.checkpoint()).map_err(run_error)
+    fn save(&mut self, py: Python<'_>) -> PyResult<PathBuf> {
+        // A unique borrow: the run is Send, not Sync.
+        let run = &mut self.run;
+        py.detach(move || run.checkpoint()).map_err(run_error)
     }
 
     /// The stages each step runs and what is written, as `eddy run --plan` prints them.

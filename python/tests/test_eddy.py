@@ -82,8 +82,8 @@ def test_a_saved_run_resumed_from_python_ends_as_the_run_that_never_stopped(tmp_
     assert resumed.steps == 7
     resumed.run()
     assert resumed.steps == whole.steps
-    assert np.array_equal(resumed.position(), whole.position())
-    assert np.array_equal(resumed.velocity(), whole.velocity())
+    assert np.array_equal(resumed.position, whole.position)
+    assert np.array_equal(resumed.velocity, whole.velocity)
     assert rows(tmp_path / "stopped" / "metrics.csv") == rows(tmp_path / "whole" / "metrics.csv")
     other = eddy.Scene.load(SCENES / "dam_break.toml", overrides={"fluid.spacing": 0.05})
     with pytest.raises(RuntimeError, match="another scene"):

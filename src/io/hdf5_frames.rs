@@ -144,6 +144,24 @@ impl Hdf5Frames {
     pub fn path(&self) -> &Path {
         &self.index.path
     }
+
+    /// Each frame's XDMF description so far: what a checkpoint keeps to go on.
+    pub fn listing(&self) -> &[String] {
+        self.index.listing()
+    }
+
+    /// Goes on with the series at `path` after the frames `listing` describes (a checkpoint's
+    /// [`Self::listing`]), deflating at `level`.
+    pub fn resumed(
+        path: &Path,
+        attributes: &[(&str, AttrValue)],
+        level: u8,
+        listing: Vec<String>,
+    ) -> Result<Self, IoError> {
+        Ok(Self {
+            index: FrameIndex::resumed(path, attributes, level, listing)?,
+        })
+    }
 }
 
 /// The index file of a frame series and the frame files it links.
@@ -187,6 +205,48 @@ impl FrameIndex {
     /// Frames listed so far.
     pub(super) fn len(&self) -> u64 {
         self.frames.len() as u64
+    }
+
+    /// Each listed frame's XDMF description, what [`FrameIndex::resumed`] takes back.
+    pub(super) fn listing(&self) -> &[String] {
+        &self.xdmf
+    }
+
+    /// The index of a resumed run, listing the first frames an earlier run wrote (their
+    /// XDMF descriptions `xdmf`, from its checkpoint); nothing is written until the next
+    /// append, so the index on disk stays the earlier run's, whose frames are all whole. An
+    /// error names a listed frame file that is gone.
+    pub(super) fn resumed(
+        path: &Path,
+        attributes: &[(&str, AttrValue)],
+        compression: u8,
+        xdmf: Vec<String>,
+    ) -> Result<Self, IoError> {
+        let mut index = Self {
+            path: path.to_path_buf(),
+            attributes: attributes
+                .iter()
+                .map(|(n, v)| (n.to_string(), v.clone()))
+                .collect(),
+            frames: Vec::new(),
+            compression: compression.min(9),
+            xdmf,
+        };
+        let stem = index.stem()?.to_owned();
+        index.frames = (0..index.xdmf.len())
+            .map(|k| format!("{stem}_{k:06}.h5"))
+            .collect();
+        if let Some(gone) = index
+            .frames
+            .iter()
+            .find(|f| !path.with_file_name(f).exists())
+        {
+            return Err(IoError::invalid(
+                path,
+                format!("the checkpoint lists the frame file {gone}, which is gone"),
+            ));
+        }
+        Ok(index)
     }
 
     /// The index's file stem, which names its frame files.

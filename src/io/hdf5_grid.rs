@@ -70,23 +70,32 @@ pub struct Hdf5GridFrames {
     geometry: Option<Geometry>,
 }
 
+/// The root attributes of a grid series: the format's, then `attributes` (none of the names
+/// the writer reserves).
+fn with_format<'a>(
+    path: &Path,
+    attributes: &[(&'a str, AttrValue)],
+) -> Result<Vec<(&'a str, AttrValue)>, IoError> {
+    if let Some((name, _)) = attributes.iter().find(|(n, _)| RESERVED.contains(n)) {
+        return Err(IoError::invalid(
+            path,
+            format!("root attribute name {name:?} is reserved for the grid writer"),
+        ));
+    }
+    let mut all = vec![
+        ("format", AttrValue::from(GRID_FORMAT)),
+        ("format_version", AttrValue::Int(GRID_FORMAT_VERSION)),
+    ];
+    all.extend_from_slice(attributes);
+    Ok(all)
+}
+
 impl Hdf5GridFrames {
     /// Creates (or replaces) the file with the format attributes, the given root attributes and
     /// an empty `/frames`, atomically as [`Hdf5Frames::create`] does.
     pub fn create(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<Self, IoError> {
-        if let Some((name, _)) = attributes.iter().find(|(n, _)| RESERVED.contains(n)) {
-            return Err(IoError::invalid(
-                path,
-                format!("root attribute name {name:?} is reserved for the grid writer"),
-            ));
-        }
-        let mut all = vec![
-            ("format", AttrValue::from(GRID_FORMAT)),
-            ("format_version", AttrValue::Int(GRID_FORMAT_VERSION)),
-        ];
-        all.extend_from_slice(attributes);
         Ok(Hdf5GridFrames {
-            index: FrameIndex::create(path, &all)?,
+            index: FrameIndex::create(path, &with_format(path, attributes)?)?,
             geometry: None,
         })
     }
@@ -155,6 +164,26 @@ impl Hdf5GridFrames {
         )?;
         self.geometry = Some(geometry);
         Ok(())
+    }
+
+    /// Each frame's XDMF description so far: what a checkpoint keeps to go on.
+    pub fn listing(&self) -> &[String] {
+        self.index.listing()
+    }
+
+    /// Goes on with the series at `path` after the frames `listing` describes (a checkpoint's
+    /// [`Self::listing`]), deflating at `level`; the grid's points are written again with the
+    /// next frame.
+    pub fn resumed(
+        path: &Path,
+        attributes: &[(&str, AttrValue)],
+        level: u8,
+        listing: Vec<String>,
+    ) -> Result<Self, IoError> {
+        Ok(Self {
+            index: FrameIndex::resumed(path, &with_format(path, attributes)?, level, listing)?,
+            geometry: None,
+        })
     }
 
     /// Number of frames appended so far.

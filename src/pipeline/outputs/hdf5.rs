@@ -13,6 +13,7 @@ use crate::io::{
     write_includes, write_links, AttrValue, Hdf5Frames, Hdf5GridFrames, IoError, ParticleFrame,
 };
 use crate::pipeline::Simulation;
+use crate::state::{Restorer, Saver};
 use crate::Real;
 
 /// The files of [`Hdf5Output`] (the XDMF and grid points files are named by `crate::io` after
@@ -111,39 +112,7 @@ impl Output for Hdf5Output {
     }
 
     fn open(&mut self, sim: &Simulation, out: &Path) -> Result<(), IoError> {
-        if let Some(sph) = sim.sph.as_ref() {
-            let mut attrs = self.attrs.clone();
-            attrs.extend([
-                ("particle_spacing", AttrValue::Real(sph.spacing)),
-                ("particle_mass", AttrValue::Real(sph.fluid.mass)),
-                ("rest_density", AttrValue::Real(sph.fluid.rest_density)),
-            ]);
-            let path = out.join(self.file(Kind::Particles));
-            self.particles = Some(Hdf5Frames::create(&path, &attrs)?.compressed(self.level));
-        }
-        let grid_series = |name: &str| {
-            Ok::<_, IoError>(
-                Hdf5GridFrames::create(&out.join(name), &self.attrs)?.compressed(self.level),
-            )
-        };
-        if sim.grid.is_some() {
-            self.grid = Some(grid_series(&self.file(Kind::Grid))?);
-            if has_fine_smoke(sim) {
-                self.fine_smoke = Some(grid_series(&format!("{FINE_SMOKE}.h5"))?);
-            }
-        }
-        if self.both {
-            // One file that opens both series: /particles and /grid link to their indexes.
-            let links = [Kind::Particles, Kind::Grid].map(|k| self.file(k));
-            write_links(
-                &out.join("frames.h5"),
-                &self.attrs,
-                &[("particles", &links[0]), ("grid", &links[1])],
-            )?;
-            let series = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.xmf", true));
-            write_includes(&out.join("frames.xmf"), &[&series[0], &series[1]])?;
-        }
-        Ok(())
+        self.open_series(sim, out, None)
     }
 
     fn write(&mut self, frame: &Frame) -> Result<(), IoError> {
@@ -167,19 +136,91 @@ impl Output for Hdf5Output {
         p.max(g) as usize
     }
 
-    /// The frames files are appended to, and going on would need them cut back to the
-    /// checkpoint's frames: not done yet, so a resume is refused before anything is written.
-    fn resume(
+    /// Each series' frames so far, as the XDMF descriptions its index lists.
+    fn save(&self, into: &mut Saver) {
+        let series = [
+            ("particles", self.particles.as_ref().map(|h| h.listing())),
+            ("grid", self.grid.as_ref().map(|h| h.listing())),
+            ("fine_smoke", self.fine_smoke.as_ref().map(|h| h.listing())),
+        ];
+        for (name, listing) in series {
+            if let Some(listing) = listing {
+                into.bytes(name, listing.join(SEPARATOR).as_bytes());
+            }
+        }
+    }
+
+    /// Each series goes on after the checkpoint's frames (frame files written after it are
+    /// overwritten as the run catches up).
+    fn resume(&mut self, sim: &Simulation, out: &Path, from: &Restorer) -> Result<(), IoError> {
+        self.open_series(sim, out, Some(from))
+    }
+}
+
+/// Between two frames' XDMF descriptions in a checkpoint.
+const SEPARATOR: &str = "\0";
+
+impl Hdf5Output {
+    /// Creates every series in `out`, or with `resumed` goes on with them from a checkpoint.
+    fn open_series(
         &mut self,
-        _sim: &Simulation,
+        sim: &Simulation,
         out: &Path,
-        _from: &crate::state::Restorer,
+        resumed: Option<&Restorer>,
     ) -> Result<(), IoError> {
-        Err(IoError::invalid(
-            out,
-            "a run with HDF5 frames (output.hdf5 = true) cannot be resumed yet; resume it with \
-             --set output.hdf5=false (its VTK frames and statistics go on)",
-        ))
+        let level = self.level;
+        let listing = |name: &str| -> Result<Option<Vec<String>>, IoError> {
+            let Some(from) = resumed else {
+                return Ok(None);
+            };
+            let bytes = from
+                .bytes(name)
+                .map_err(|e| IoError::invalid(out, e.to_string()))?;
+            let text = String::from_utf8_lossy(&bytes).into_owned();
+            Ok(Some(if text.is_empty() {
+                Vec::new()
+            } else {
+                text.split(SEPARATOR).map(str::to_owned).collect()
+            }))
+        };
+        if let Some(sph) = sim.sph.as_ref() {
+            let mut attrs = self.attrs.clone();
+            attrs.extend([
+                ("particle_spacing", AttrValue::Real(sph.spacing)),
+                ("particle_mass", AttrValue::Real(sph.fluid.mass)),
+                ("rest_density", AttrValue::Real(sph.fluid.rest_density)),
+            ]);
+            let path = out.join(self.file(Kind::Particles));
+            self.particles = Some(match listing("particles")? {
+                Some(l) => Hdf5Frames::resumed(&path, &attrs, level, l)?,
+                None => Hdf5Frames::create(&path, &attrs)?.compressed(level),
+            });
+        }
+        let grid_series = |file: &str, name: &str| {
+            let path = out.join(file);
+            Ok::<_, IoError>(match listing(name)? {
+                Some(l) => Hdf5GridFrames::resumed(&path, &self.attrs, level, l)?,
+                None => Hdf5GridFrames::create(&path, &self.attrs)?.compressed(level),
+            })
+        };
+        if sim.grid.is_some() {
+            self.grid = Some(grid_series(&self.file(Kind::Grid), "grid")?);
+            if has_fine_smoke(sim) {
+                self.fine_smoke = Some(grid_series(&format!("{FINE_SMOKE}.h5"), "fine_smoke")?);
+            }
+        }
+        if self.both {
+            // One file that opens both series: /particles and /grid link to their indexes.
+            let links = [Kind::Particles, Kind::Grid].map(|k| self.file(k));
+            write_links(
+                &out.join("frames.h5"),
+                &self.attrs,
+                &[("particles", &links[0]), ("grid", &links[1])],
+            )?;
+            let series = [Kind::Particles, Kind::Grid].map(|k| k.file("frames.xmf", true));
+            write_includes(&out.join("frames.xmf"), &[&series[0], &series[1]])?;
+        }
+        Ok(())
     }
 }
 

@@ -622,6 +622,7 @@ fn the_protocol_runs_on_particles() {
         plot: None,
         seeds: 1,
         runs: Vec::new(),
+        checkpoint_every: std::time::Duration::from_secs(600),
     };
     let rows = run(&file, &options).expect("the protocol runs");
     let labels: Vec<&str> = rows.iter().map(|r| r.label).collect();
@@ -651,4 +652,53 @@ fn the_protocol_runs_on_particles() {
         stations.iter().all(|s| (s - 0.57).abs() < 1e-9),
         "{stations:?}"
     );
+}
+
+/// A bench-abl run killed after a checkpoint and run again goes on from the checkpoint and
+/// writes the profiles of a run that never stopped, value for value.
+#[test]
+fn a_killed_protocol_run_goes_on_from_its_checkpoint() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = eager_file(dir.path(), |body| body.replace("steps = 6", "end = 0.3"));
+    let bench = |profiles: &Path| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_eddy"));
+        c.arg("bench-abl")
+            .arg(&file)
+            .args([
+                "--runs",
+                "none",
+                "--skip-reference",
+                "--checkpoint-every",
+                "0",
+            ])
+            .arg("--profiles")
+            .arg(profiles)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null());
+        c
+    };
+    let _serial = common::hdf5_or_child();
+    let (whole, killed) = (dir.path().join("whole"), dir.path().join("killed"));
+    assert!(bench(&whole).status().expect("runs").success());
+    let mut child = bench(&killed).spawn().expect("starts");
+    let checkpoint = killed.join("none.checkpoint.h5");
+    let mut waited = 0;
+    while !checkpoint.exists() && waited < 20_000 {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+        waited += 2;
+    }
+    // A few more checkpoints, then the kill (one may be mid-write: the last whole one stays).
+    std::thread::sleep(std::time::Duration::from_millis(30));
+    child.kill().expect("kill");
+    child.wait().expect("ends");
+    assert!(checkpoint.exists(), "the killed run left its checkpoint");
+    assert!(!killed.join("none.csv").exists(), "killed before its end");
+    assert!(bench(&killed).status().expect("runs").success());
+    assert!(
+        !checkpoint.exists(),
+        "the checkpoint goes when the run ends"
+    );
+    let read = |d: &Path| std::fs::read_to_string(d.join("none.csv")).expect("profiles");
+    assert_eq!(read(&whole), read(&killed));
 }

@@ -25,9 +25,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::abl_particles::{default_stations, Bins};
 use crate::io::plot::{error_figure, CurvePanel, ErrorPoint};
-use crate::io::{AttrValue, CsvSeries, IoError};
+use crate::io::{read_checkpoint, write_checkpoint, AttrValue, CsvSeries, IoError};
 use crate::pipeline::outputs::write_statistics;
-use crate::pipeline::{Pipeline, RunError};
+use crate::pipeline::{CheckpointError, Pipeline, RunError};
 use crate::scene::{self, Axis, Scene, Station, Statistics};
 use crate::Real;
 
@@ -50,7 +50,8 @@ pub struct AblBenchOptions {
     /// Read the reference's profiles from this CSV (written by an earlier run into
     /// `profiles`) instead of running it: calibration sweeps then cost only the coarse runs.
     pub reference: Option<PathBuf>,
-    /// Write each run's profiles into this folder as `LABEL.csv` (station, y, U, k).
+    /// Write each run's profiles into this folder as `LABEL.csv` (station, y, U, k); a run
+    /// keeps its progress there (`LABEL.checkpoint.h5`) and goes on from it.
     pub profiles: Option<PathBuf>,
     /// Draw the U and k errors against wall time and the U profiles at the middle station into
     /// this PNG.
@@ -62,6 +63,8 @@ pub struct AblBenchOptions {
     /// Only these runs (labels none, random, abl, reference); every one when empty. A
     /// reference run alone is how one is stored for later `reference` comparisons.
     pub runs: Vec<String>,
+    /// Wall time between a run's checkpoints in `profiles` (`LABEL.checkpoint.h5`).
+    pub checkpoint_every: std::time::Duration,
 }
 
 /// One run of the table.
@@ -169,13 +172,58 @@ impl Coarse {
 
 /// Runs one configuration to the scene's end (or until it fails: the row then says why),
 /// timing the steps; returns the row (without errors) and its profiles.
+/// A run's progress in a bench checkpoint: the pipeline's state, then the bench's own counts.
+fn save_progress(
+    path: &Path,
+    key: &str,
+    p: &Pipeline,
+    (steps, counted, window, seconds): (u64, Real, Real, f64),
+) -> Result<(), RunError> {
+    let mut state = p.save_state();
+    let mut b = state.section("bench");
+    b.u64("steps", steps);
+    b.reals("counted_window_seconds", &[counted, window, seconds]);
+    write_checkpoint(path, &[("scene", AttrValue::Str(key.to_owned()))], &state)?;
+    Ok(())
+}
+
+/// Takes a run's progress back from `path` into `p`, built from the same scene (`key`).
+fn resume_progress(
+    path: &Path,
+    key: &str,
+    p: &mut Pipeline,
+) -> Result<(u64, Real, Real, f64), RunError> {
+    let stored = read_checkpoint(path)?;
+    if stored.text("scene") != Some(key) {
+        return Err(RunError::Unsupported(format!(
+            "{}: a bench-abl checkpoint of another scene or run; remove it to start the run again",
+            path.display()
+        )));
+    }
+    let invalid = |source| CheckpointError::State {
+        path: path.to_path_buf(),
+        source,
+    };
+    p.restore_state(&stored.state).map_err(invalid)?;
+    let b = stored.state.read("bench");
+    let steps = b.u64("steps").map_err(invalid)?;
+    let v = b.reals_n("counted_window_seconds", 3).map_err(invalid)?;
+    Ok((steps, v[0], v[1], v[2]))
+}
+
+/// Runs `label`'s scene to its end and reads its profiles. With `checkpoint` (a path and how
+/// often), a long run keeps its progress there and goes on from it when it is there (the
+/// reference at half the particle spacing takes hours: it can run in pieces); the file is
+/// removed when the run ends.
 fn measure(
     label: &'static str,
     scene: &Scene,
     stations: &[Real],
     coarse: Coarse,
     from: Real,
+    checkpoint: Option<(&Path, std::time::Duration)>,
 ) -> Result<(AblBenchRow, Profiles, Pipeline), RunError> {
+    let (checkpoint, every) = checkpoint.unzip();
     let mut scene = scene.clone();
     scene.statistics = Some(coarse.statistics(&scene, stations, from));
     let mut p = Pipeline::build(&scene)?;
@@ -204,7 +252,17 @@ fn measure(
     };
     let started = Instant::now();
     let (mut steps, mut failed) = (0, None);
-    let (mut counted, mut window) = (0.0, 0.0);
+    let (mut counted, mut window, mut earlier) = (0.0, 0.0, 0.0);
+    let key = scene.to_toml();
+    if let Some(path) = checkpoint.filter(|p| p.exists()) {
+        (steps, counted, window, earlier) = resume_progress(path, &key, &mut p)?;
+        tracing::warn!(
+            "bench-abl: {label} goes on from {} at t = {} s",
+            path.display(),
+            p.sim.time()
+        );
+    }
+    let mut saved = Instant::now();
     while p.sim.time() < end - 1e-12 {
         let rec = match p.step(Some(end), None) {
             Ok(rec) => rec,
@@ -220,8 +278,16 @@ fn measure(
             counted += vortices(&p) as Real * dt;
             window += dt;
         }
+        if let Some(path) = checkpoint.filter(|_| every.is_some_and(|e| saved.elapsed() >= e)) {
+            let seconds = earlier + started.elapsed().as_secs_f64();
+            save_progress(path, &key, &p, (steps, counted, window, seconds))?;
+            saved = Instant::now();
+        }
     }
-    let seconds = started.elapsed().as_secs_f64();
+    let seconds = earlier + started.elapsed().as_secs_f64();
+    if let Some(path) = checkpoint.filter(|p| p.exists()) {
+        std::fs::remove_file(path).map_err(|e| IoError::io(path, "removing", e))?;
+    }
     bar.finish_and_clear();
     let stats = &p.sim.statistics[0].stats;
     let profiles: Profiles = stats
@@ -396,20 +462,25 @@ pub fn run(path: &Path, options: &AblBenchOptions) -> Result<Vec<AblBenchRow>, R
     let mut profiles = Vec::new();
     let chosen = |label: &str| options.runs.is_empty() || options.runs.iter().any(|r| r == label);
     for (label, scene) in configs.iter().filter(|(l, _)| chosen(l)) {
-        let (row, prof, p) = measure(label, scene, &stations, coarse, from)?;
+        let repeated = match *label {
+            "random" | "abl" => true,
+            "none" => gusty,
+            _ => false,
+        };
+        let name = if repeated && options.seeds > 1 {
+            format!("{label}_seed{}", scene.seed)
+        } else {
+            (*label).to_owned()
+        };
+        let checkpoint = options
+            .profiles
+            .as_ref()
+            .map(|dir| dir.join(format!("{name}.checkpoint.h5")));
+        let checkpoint = checkpoint.as_deref().map(|c| (c, options.checkpoint_every));
+        let (row, prof, p) = measure(label, scene, &stations, coarse, from, checkpoint)?;
         // Each run's profiles and statistics are written as it ends: a long comparison keeps
         // what it has measured.
         if let Some(dir) = &options.profiles {
-            let repeated = match row.label {
-                "random" | "abl" => true,
-                "none" => gusty,
-                _ => false,
-            };
-            let name = if repeated && options.seeds > 1 {
-                format!("{}_seed{}", row.label, row.seed)
-            } else {
-                row.label.to_owned()
-            };
             write_profiles(&dir.join(format!("{name}.csv")), &prof, &stations, coarse)?;
             let m = &p.sim.statistics[0];
             let attrs = [

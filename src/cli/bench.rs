@@ -129,9 +129,14 @@ pub struct AblBenchArgs {
     #[arg(long, value_name = "CSV")]
     pub reference: Option<PathBuf>,
     /// Write each run's profiles (station, y, U, k, U_ci, k_ci) into this folder as LABEL.csv,
-    /// and its statistics as LABEL_statistics.h5, as each run ends.
+    /// and its statistics as LABEL_statistics.h5, as each run ends. A run keeps its progress
+    /// there as LABEL.checkpoint.h5 every 10 minutes and goes on from it when the command is
+    /// run again (the reference can run in pieces); the file goes when the run ends.
     #[arg(long, value_name = "DIR")]
     pub profiles: Option<PathBuf>,
+    /// Minutes of wall time between a run's checkpoints in --profiles.
+    #[arg(long, value_name = "MINUTES", default_value_t = 10.0)]
+    pub checkpoint_every: f64,
     /// Draw the errors against wall time and the middle station's U profiles into this PNG.
     #[arg(long, value_name = "PNG")]
     pub plot: Option<PathBuf>,
@@ -158,6 +163,7 @@ impl From<AblBenchArgs> for AblBenchOptions {
             plot: a.plot,
             seeds: a.seeds,
             runs: a.runs,
+            checkpoint_every: std::time::Duration::from_secs_f64(60.0 * a.checkpoint_every),
         }
     }
 }

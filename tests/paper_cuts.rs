@@ -388,7 +388,8 @@ fn impossible_set_ups_are_refused() {
     }
 }
 
-/// The refinement scenes write frames by default: a user wants to look at them.
+/// The refinement scenes write frames by default: a user wants to look at them. Each scene's
+/// frame at t = 0 is written, as a run writes it, and holds every fluid particle.
 #[test]
 fn refinement_scenes_write_frames() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -398,7 +399,20 @@ fn refinement_scenes_write_frames() {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         if name.starts_with("refine_") && name.ends_with(".toml") {
             let s = eddy::scene::load(&path, &[]).expect("shipped scene loads");
-            assert!(s.output.vtk, "{name} writes no frames");
+            let out = tempfile::tempdir().expect("temp dir");
+            let _serial = common::hdf5_or_child();
+            let mut p = eddy::pipeline::Pipeline::build(&s).expect("the scene builds");
+            p.open(out.path()).expect("its outputs open");
+            p.outputs.write(&p.sim).expect("the first frame is written");
+            let frame = std::fs::read(out.path().join("particles_000000.vtp"))
+                .unwrap_or_else(|e| panic!("{name} writes no particle frame: {e}"));
+            // The XML header is text; the appended arrays after it are not.
+            let frame = String::from_utf8_lossy(&frame);
+            let n = p.sim.sph.as_ref().expect("an SPH scene").fluid.len();
+            assert!(
+                frame.contains(&format!("NumberOfPoints=\"{n}\"")),
+                "{name}: the frame does not hold its {n} particles"
+            );
             checked += 1;
         }
     }

@@ -2,11 +2,9 @@
 //! exactness at samples, linearity in speed, continuity across the azimuth seam and at the
 //! poles, the world frame, and clear errors for wrong, truncated, foreign or incomplete files.
 
-mod common;
-
 use eddy::abl::{
     geometry_fingerprint, AblData, AblDatabase, AblError, AblHeader, DirectionTable, MotionKind,
-    Sampling, ABL_FORMAT, ABL_FORMAT_VERSION,
+    Sampling, ABL_FORMAT_VERSION,
 };
 use eddy::scene::Shape;
 use eddy::{Point3, Real, Vec3};
@@ -100,83 +98,6 @@ fn round_trip_is_identical_and_leaves_no_temporary() {
         .map(|e| e.expect("entry").file_name())
         .collect();
     assert_eq!(names, vec![std::ffi::OsString::from("db.h5")]);
-}
-
-/// What h5py reads of a written database: the attributes, shapes and types the format
-/// documents, and values at known places, against what the test wrote.
-const H5PY_LAYOUT: &str = r#"
-import json, math, sys
-import h5py, numpy as np
-path, expected = sys.argv[1], json.loads(sys.argv[2])
-f = h5py.File(path, "r")
-assert f.attrs["format"] == expected["format"], f.attrs["format"]
-assert "1/s per m/s" in f.attrs["units"]
-assert f.attrs["obstacle"] == "sphere"
-assert int(f.attrs["format_version"]) == expected["version"]
-assert float(f.attrs["beta"]) == 1.5
-points = expected["points"]
-for name in ("points", "normals"):
-    assert f[name].dtype == np.float64 and f[name].shape == (points, 3), name
-assert list(f["points"][1]) == expected["point_1"]
-for kind in expected["kinds"]:
-    g = f[kind]
-    assert (int(g.attrs["polar_samples"]), int(g.attrs["azimuth_samples"])) == (6, 8)
-    polar = g["polar_angles"][:]
-    assert polar.shape == (6,) and polar[0] == 0.0 and polar[5] == math.pi
-    assert g["azimuth_angles"].shape == (8,)
-    assert g["directions"].dtype == np.float64 and g["directions"].shape == (48, 3)
-    row = expected["row"]
-    assert list(g["directions"][row]) == expected["direction"], kind
-    omega = g["omega"]
-    assert omega.dtype == np.float64 and omega.shape == (48, points, 3)
-    assert list(omega[row, 4]) == expected["omega"][kind], kind
-    assert g["complete"].dtype == np.uint8 and np.all(g["complete"][:] == 1)
-print("ok")
-"#;
-
-#[test]
-fn layout_is_as_documented_for_h5py() {
-    let Some(python) = common::python_with(&["h5py", "numpy"]) else {
-        return;
-    };
-    let tmp = tempfile::tempdir().expect("temp dir");
-    let s = Sampling::new(6, 8).expect("valid");
-    let data = synthetic(s);
-    let path = written(tmp.path(), &data);
-    let list = |v: &[Real]| {
-        let items: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
-        format!("[{}]", items.join(", "))
-    };
-    let d = s.direction(2, 3);
-    let omega: Vec<String> = MotionKind::ALL
-        .iter()
-        .map(|&kind| format!("{:?}: {}", kind.name(), list(field(4, &d, kind).as_slice())))
-        .collect();
-    let kinds: Vec<String> = MotionKind::ALL
-        .iter()
-        .map(|k| format!("{:?}", k.name()))
-        .collect();
-    let expected = format!(
-        r#"{{"format": {ABL_FORMAT:?}, "version": {ABL_FORMAT_VERSION}, "points": {POINTS},
-            "point_1": {}, "kinds": [{}], "row": {}, "direction": {}, "omega": {{{}}}}}"#,
-        list(data.points[1].coords.as_slice()),
-        kinds.join(", "),
-        s.row(2, 3),
-        list(d.as_slice()),
-        omega.join(", ")
-    );
-    let out = std::process::Command::new(python)
-        .args(["-c", H5PY_LAYOUT])
-        .arg(&path)
-        .arg(&expected)
-        .output()
-        .expect("python runs");
-    assert!(
-        out.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 #[test]

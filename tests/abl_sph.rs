@@ -411,6 +411,7 @@ fn a_database_for_another_obstacle_is_refused() {
     let other =
         text(&common::abl_line(&db), "").replace(&format!("radius = {RADIUS}"), "radius = 0.1");
     let scene = scene(&other).expect("loads");
+    let _serial = common::hdf5_or_child();
     let e = Pipeline::build(&scene).err().expect("refused").to_string();
     let fp = |r: Real| {
         eddy::abl::geometry_fingerprint(&Shape::Sphere { radius: r })
@@ -624,7 +625,10 @@ fn the_protocol_runs_on_particles() {
         runs: Vec::new(),
         checkpoint_every: std::time::Duration::from_secs(600),
     };
-    let rows = run(&file, &options).expect("the protocol runs");
+    let rows = {
+        let _serial = common::hdf5_or_child();
+        run(&file, &options).expect("the protocol runs")
+    };
     let labels: Vec<&str> = rows.iter().map(|r| r.label).collect();
     assert_eq!(labels, ["none", "random", "abl"]);
     for r in &rows {

@@ -47,6 +47,14 @@ impl Values {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Bytes the values hold.
+    pub fn bytes(&self) -> usize {
+        match self {
+            Values::U8(v) => v.len(),
+            _ => 8 * self.len(),
+        }
+    }
 }
 
 /// Why a state could not be restored.
@@ -66,11 +74,22 @@ pub enum StateError {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct State {
     entries: BTreeMap<String, Values>,
+    /// For a state made by [`State::sizing`]: the bytes saved so far, nothing kept.
+    sized: Option<usize>,
 }
 
 impl State {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A state that only counts the bytes saved into it (a checkpoint's size for the plan,
+    /// without copying the fields).
+    pub fn sizing() -> Self {
+        Self {
+            entries: BTreeMap::new(),
+            sized: Some(0),
+        }
     }
 
     /// A writer for entries under `section`.
@@ -99,9 +118,10 @@ impl State {
         self.entries.insert(path, values);
     }
 
-    /// Bytes the entries hold.
+    /// Bytes the entries hold (or, made by [`State::sizing`], would hold).
     pub fn bytes(&self) -> usize {
-        self.entries.values().map(|v| 8 * v.len()).sum()
+        self.sized
+            .unwrap_or_else(|| self.entries.values().map(Values::bytes).sum())
     }
 }
 
@@ -128,14 +148,19 @@ impl Saver<'_> {
         }
     }
 
-    fn put(&mut self, name: &str, values: Values) {
+    /// Keeps the entry `name` of `bytes` bytes that `values` makes, or only counts them.
+    fn put(&mut self, name: &str, bytes: usize, values: impl FnOnce() -> Values) {
+        if let Some(sized) = self.state.sized.as_mut() {
+            *sized += bytes;
+            return;
+        }
         let path = join(&self.prefix, name);
-        let earlier = self.state.entries.insert(path.clone(), values);
+        let earlier = self.state.entries.insert(path.clone(), values());
         debug_assert!(earlier.is_none(), "state entry {path} saved twice");
     }
 
     pub fn reals(&mut self, name: &str, v: &[Real]) {
-        self.put(name, Values::F64(v.to_vec()));
+        self.put(name, 8 * v.len(), || Values::F64(v.to_vec()));
     }
 
     pub fn real(&mut self, name: &str, v: Real) {
@@ -144,14 +169,13 @@ impl Saver<'_> {
 
     /// Vectors as x, y, z in turn.
     pub fn vec3s(&mut self, name: &str, v: &[Vec3]) {
-        self.put(
-            name,
-            Values::F64(v.iter().flat_map(|v| [v.x, v.y, v.z]).collect()),
-        );
+        self.put(name, 24 * v.len(), || {
+            Values::F64(v.iter().flat_map(|v| [v.x, v.y, v.z]).collect())
+        });
     }
 
     pub fn u64s(&mut self, name: &str, v: &[u64]) {
-        self.put(name, Values::U64(v.to_vec()));
+        self.put(name, 8 * v.len(), || Values::U64(v.to_vec()));
     }
 
     pub fn u64(&mut self, name: &str, v: u64) {
@@ -159,11 +183,11 @@ impl Saver<'_> {
     }
 
     pub fn i64s(&mut self, name: &str, v: &[i64]) {
-        self.put(name, Values::I64(v.to_vec()));
+        self.put(name, 8 * v.len(), || Values::I64(v.to_vec()));
     }
 
     pub fn bytes(&mut self, name: &str, v: &[u8]) {
-        self.put(name, Values::U8(v.to_vec()));
+        self.put(name, v.len(), || Values::U8(v.to_vec()));
     }
 
     pub fn flag(&mut self, name: &str, v: bool) {
@@ -195,11 +219,6 @@ impl Restorer<'_> {
             prefix: join(&self.prefix, name),
             state: self.state,
         }
-    }
-
-    /// The full path of the entry `name`, for a part's own errors.
-    pub fn path(&self, name: &str) -> String {
-        join(&self.prefix, name)
     }
 
     /// Whether the entry `name` is there (for optional parts).

@@ -114,14 +114,20 @@ fn no_file_cites_a_path_outside_the_repository() {
         eprintln!("not a git checkout: the check is skipped");
         return;
     };
-    let outside = ["../shared", "shared/DESIGN", "PAPER-NOTES"];
+    // The folder beside the repository that held the design and the papers' errata, and their
+    // file names; joined here so that this file names none of them itself.
+    let outside = [
+        ["..", "shared"].join("/"),
+        ["shared", "DESIGN"].join("/"),
+        ["PAPER", "NOTES"].join("-"),
+    ];
     let mut found = Vec::new();
     for file in String::from_utf8_lossy(&listed.stdout).lines() {
         let Ok(text) = std::fs::read_to_string(root().join(file)) else {
             continue;
         };
         for (n, line) in text.lines().enumerate() {
-            if outside.iter().any(|o| line.contains(o)) && !file.ends_with("tests/docs.rs") {
+            if outside.iter().any(|o| line.contains(o.as_str())) {
                 found.push(format!("{file}:{}: {line}", n + 1));
             }
         }

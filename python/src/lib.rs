@@ -181,6 +181,21 @@ impl Simulation {
             .ok_or_else(|| PyValueError::new_err("the scene has no grid ([grid])"))
     }
 
+    /// A run of `scene` into `out`, started or (with `resume`) gone on from its checkpoint,
+    /// built with the GIL released.
+    fn begin(py: Python<'_>, scene: &Scene, out: Option<PathBuf>, resume: bool) -> PyResult<Self> {
+        let options = RunOptions {
+            out,
+            resume,
+            ..RunOptions::default()
+        };
+        let inner = &scene.inner;
+        let run = py
+            .detach(|| Run::begin(inner, &options))
+            .map_err(run_error)?;
+        Ok(Simulation { run, dt: 0.0 })
+    }
+
     /// One step with the GIL released, then a check for Ctrl-C; false once the run has ended.
     fn advance(&mut self, py: Python<'_>) -> PyResult<bool> {
         let run = &mut self.run;
@@ -206,15 +221,7 @@ impl Simulation {
     #[new]
     #[pyo3(signature = (scene, out = None))]
     fn new(py: Python<'_>, scene: &Scene, out: Option<PathBuf>) -> PyResult<Self> {
-        let options = RunOptions {
-            out,
-            ..RunOptions::default()
-        };
-        let inner = &scene.inner;
-        let run = py
-            .detach(|| Run::start(inner, &options))
-            .map_err(run_error)?;
-        Ok(Simulation { run, dt: 0.0 })
+        Self::begin(py, scene, out, false)
     }
 
     /// Goes on with the run in `out` (default: the scene's output folder) from its
@@ -223,16 +230,7 @@ impl Simulation {
     #[staticmethod]
     #[pyo3(signature = (scene, out = None))]
     fn resume(py: Python<'_>, scene: &Scene, out: Option<PathBuf>) -> PyResult<Self> {
-        let options = RunOptions {
-            out,
-            resume: true,
-            ..RunOptions::default()
-        };
-        let inner = &scene.inner;
-        let run = py
-            .detach(|| Run::resume(inner, &options))
-            .map_err(run_error)?;
-        Ok(Simulation { run, dt: 0.0 })
+        Self::begin(py, scene, out, true)
     }
 
     /// Writes the whole state between steps to `checkpoint.h5` in the output folder (what

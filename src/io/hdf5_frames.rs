@@ -180,6 +180,43 @@ pub(super) struct FrameIndex {
 impl FrameIndex {
     /// Checks the attribute names and writes the index with no frames.
     pub(super) fn create(path: &Path, attributes: &[(&str, AttrValue)]) -> Result<Self, IoError> {
+        let index = Self::listing_frames(path, attributes, 0, Vec::new())?;
+        index.write(&index.frames, |_| Ok(()))?;
+        Ok(index)
+    }
+
+    /// The index of a resumed run, listing the first frames an earlier run wrote (their
+    /// XDMF descriptions `xdmf`, from its checkpoint); nothing is written until the next
+    /// append, so the index on disk stays the earlier run's, whose frames are all whole. An
+    /// error names a listed frame file that is gone.
+    pub(super) fn resumed(
+        path: &Path,
+        attributes: &[(&str, AttrValue)],
+        compression: u8,
+        xdmf: Vec<String>,
+    ) -> Result<Self, IoError> {
+        let index = Self::listing_frames(path, attributes, compression.min(9), xdmf)?;
+        if let Some(gone) = index
+            .frames
+            .iter()
+            .find(|f| !path.with_file_name(f).exists())
+        {
+            return Err(IoError::invalid(
+                path,
+                format!("the checkpoint lists the frame file {gone}, which is gone"),
+            ));
+        }
+        Ok(index)
+    }
+
+    /// The index listing one frame file per description of `xdmf`, not yet written; an error
+    /// names an empty or repeated attribute name.
+    fn listing_frames(
+        path: &Path,
+        attributes: &[(&str, AttrValue)],
+        compression: u8,
+        xdmf: Vec<String>,
+    ) -> Result<Self, IoError> {
         for (i, (name, _)) in attributes.iter().enumerate() {
             if name.is_empty() || attributes[..i].iter().any(|(other, _)| other == name) {
                 return Err(IoError::invalid(
@@ -188,17 +225,19 @@ impl FrameIndex {
                 ));
             }
         }
-        let index = Self {
+        let mut index = Self {
             path: path.to_path_buf(),
             attributes: attributes
                 .iter()
                 .map(|(n, v)| (n.to_string(), v.clone()))
                 .collect(),
             frames: Vec::new(),
-            compression: 0,
-            xdmf: Vec::new(),
+            compression,
+            xdmf,
         };
-        index.write(&index.frames, |_| Ok(()))?;
+        index.frames = (0..index.xdmf.len())
+            .map(|k| index.frame_file(k))
+            .collect::<Result<_, _>>()?;
         Ok(index)
     }
 
@@ -212,41 +251,9 @@ impl FrameIndex {
         &self.xdmf
     }
 
-    /// The index of a resumed run, listing the first frames an earlier run wrote (their
-    /// XDMF descriptions `xdmf`, from its checkpoint); nothing is written until the next
-    /// append, so the index on disk stays the earlier run's, whose frames are all whole. An
-    /// error names a listed frame file that is gone.
-    pub(super) fn resumed(
-        path: &Path,
-        attributes: &[(&str, AttrValue)],
-        compression: u8,
-        xdmf: Vec<String>,
-    ) -> Result<Self, IoError> {
-        let mut index = Self {
-            path: path.to_path_buf(),
-            attributes: attributes
-                .iter()
-                .map(|(n, v)| (n.to_string(), v.clone()))
-                .collect(),
-            frames: Vec::new(),
-            compression: compression.min(9),
-            xdmf,
-        };
-        let stem = index.stem()?.to_owned();
-        index.frames = (0..index.xdmf.len())
-            .map(|k| format!("{stem}_{k:06}.h5"))
-            .collect();
-        if let Some(gone) = index
-            .frames
-            .iter()
-            .find(|f| !path.with_file_name(f).exists())
-        {
-            return Err(IoError::invalid(
-                path,
-                format!("the checkpoint lists the frame file {gone}, which is gone"),
-            ));
-        }
-        Ok(index)
+    /// The file name of frame `k`: the index's stem and the frame's number.
+    fn frame_file(&self, k: usize) -> Result<String, IoError> {
+        Ok(format!("{}_{k:06}.h5", self.stem()?))
     }
 
     /// The index's file stem, which names its frame files.
@@ -269,7 +276,7 @@ impl FrameIndex {
         describe: impl FnOnce(&str) -> Vec<String>,
     ) -> Result<(), IoError> {
         let stem = self.stem()?.to_owned();
-        let name = format!("{stem}_{:06}.h5", self.frames.len());
+        let name = self.frame_file(self.frames.len())?;
         let frame_path = self.path.with_file_name(&name);
         replace_file(&frame_path, |file| {
             write_scalar_attr(file, "time", &time)?;

@@ -246,11 +246,11 @@ impl Persist for Station {
         let values = from.reals("batches")?;
         let per_batch = (4 * self.cells.len()).max(1);
         if values.len() % per_batch != 0 {
-            return Err(StateError::Mismatch {
-                name: from.path("batches"),
-                found: format!("{} values", values.len()),
-                expected: format!("a multiple of {per_batch} (U and k per bin)"),
-            });
+            return Err(from.invalid(
+                "batches",
+                format!("{} values", values.len()),
+                format!("a multiple of {per_batch} (U and k per bin)"),
+            ));
         }
         self.batches = values
             .chunks_exact(per_batch)

@@ -346,11 +346,11 @@ pub(crate) fn restore_moments(
     let reals = r.reals_n("reals", REALS_PER_CELL * cells.len())?;
     let samples = r.u64s("samples")?;
     if samples.len() != cells.len() {
-        return Err(StateError::Mismatch {
-            name: r.path("samples"),
-            found: format!("{} values", samples.len()),
-            expected: format!("{}, one per cell", cells.len()),
-        });
+        return Err(r.invalid(
+            "samples",
+            format!("{} values", samples.len()),
+            format!("{}, one per cell", cells.len()),
+        ));
     }
     for ((c, v), &n) in cells
         .iter_mut()

@@ -72,6 +72,18 @@ impl Pipeline {
     /// own by position and name, and the rows of each CSV series.
     pub fn save_state(&self) -> State {
         let mut state = State::new();
+        self.save_into(&mut state);
+        state
+    }
+
+    /// Bytes of [`Pipeline::save_state`]'s arrays, counted without copying them.
+    pub fn state_bytes(&self) -> usize {
+        let mut state = State::sizing();
+        self.save_into(&mut state);
+        state.bytes()
+    }
+
+    fn save_into(&self, state: &mut State) {
         let sim = &self.sim;
         {
             let mut s = state.section("simulation");
@@ -103,7 +115,6 @@ impl Pipeline {
             }
         }
         self.outputs.save(&mut state.section("outputs"));
-        state
     }
 
     /// Takes back the state [`Pipeline::save_state`] saved, into a pipeline freshly built from

@@ -35,11 +35,7 @@ struct End {
 /// [`RunOptions::resume`]). A stop asked for through [`RunOptions::stop`] writes a checkpoint
 /// after the step in progress and ends the run with [`RunError::Interrupted`].
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let mut run = if options.resume {
-        Run::resume(scene, options)?
-    } else {
-        Run::start(scene, options)?
-    };
+    let mut run = Run::begin(scene, options)?;
     let bar = progress_bar(options.progress, &run.end);
     let mut trace = Vec::new();
     while let Some(rec) = run.advance(options.trace.then_some(&mut trace))? {
@@ -152,6 +148,15 @@ impl Run {
         let mut pipeline = Pipeline::build(scene)?;
         pipeline.open(&out)?;
         Ok(Run::assemble(pipeline, scene, out, 0, started))
+    }
+
+    /// [`Run::resume`] with [`RunOptions::resume`], else [`Run::start`].
+    pub fn begin(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+        if options.resume {
+            Run::resume(scene, options)
+        } else {
+            Run::start(scene, options)
+        }
     }
 
     /// Goes on from the checkpoint in the scene's output folder: the pipeline built from the

@@ -130,7 +130,7 @@ fn checkpoint_line(p: &Pipeline) -> String {
         when.push(format!("every {m} min of wall time"));
     }
     when.push("on SIGINT or SIGTERM".into());
-    let mib = p.save_state().bytes() as f64 / (1024.0 * 1024.0);
+    let mib = p.state_bytes() as f64 / (1024.0 * 1024.0);
     format!(
         "{CHECKPOINT_FILE} {}, {mib:.1} MiB of state at the start; `eddy resume DIR` goes on \
          from it",

@@ -177,26 +177,9 @@ impl Scene {
         let mut names: Vec<&str> = Vec::new();
         for (i, station) in stats.stations.iter().enumerate() {
             let key = format!("statistics.stations[{i}]");
-            let name = station.name.as_str();
-            let well_formed = !name.is_empty()
-                && name
-                    .chars()
-                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
-            if !well_formed {
-                return Err(c.invalid(
-                    format!("{key}.name"),
-                    format!("{name:?}"),
-                    "a non-empty name of A-Z, a-z, 0-9 and _ (it names a file)",
-                ));
-            }
-            if let Some(first) = names.iter().position(|n| *n == name) {
-                return Err(c.invalid(
-                    format!("{key}.name"),
-                    format!("{name:?}"),
-                    format!("a name no other station has (`statistics.stations[{first}]` has it)"),
-                ));
-            }
-            names.push(name);
+            unique_name(c, &key, &station.name, &mut names, "a file", |first| {
+                format!("a name no other station has (`statistics.stations[{first}]` has it)")
+            })?;
             self.point_inside(c, &format!("{key}.min"), &station.min)?;
             self.point_inside(c, &format!("{key}.max"), &station.max)?;
             for a in 0..3 {
@@ -322,25 +305,9 @@ impl Scene {
         for (i, probe) in self.probes.iter().enumerate() {
             let key = format!("probes[{i}]");
             let name = probe.name();
-            let well_formed = !name.is_empty()
-                && name
-                    .chars()
-                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
-            if !well_formed {
-                return Err(c.invalid(
-                    format!("{key}.name"),
-                    format!("{name:?}"),
-                    "a non-empty name of A-Z, a-z, 0-9 and _ (it names CSV columns)",
-                ));
-            }
-            if let Some(first) = names.iter().position(|n| *n == name) {
-                return Err(c.invalid(
-                    format!("{key}.name"),
-                    format!("{name:?}"),
-                    format!("a name no other probe has (`probes[{first}].name` has it)"),
-                ));
-            }
-            names.push(name);
+            unique_name(c, &key, name, &mut names, "CSV columns", |first| {
+                format!("a name no other probe has (`probes[{first}].name` has it)")
+            })?;
             let grid_only = matches!(probe, Probe::Line { .. } | Probe::Force { .. });
             if grid_only && self.grid.is_none() {
                 return Err(c.invalid(
@@ -626,4 +593,32 @@ impl Checker<'_> {
         }
         Ok(())
     }
+}
+
+/// `KEY.name` is a non-empty name of A-Z, a-z, 0-9 and _ (it names `names_what`), and no earlier
+/// entry of `names` has it (`taken` words the refusal from the first that does); it is added.
+fn unique_name<'a>(
+    c: &Checker,
+    key: &str,
+    name: &'a str,
+    names: &mut Vec<&'a str>,
+    names_what: &str,
+    taken: impl Fn(usize) -> String,
+) -> Result<(), SceneError> {
+    let well_formed = !name.is_empty()
+        && name
+            .chars()
+            .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+    if !well_formed {
+        return Err(c.invalid(
+            format!("{key}.name"),
+            format!("{name:?}"),
+            format!("a non-empty name of A-Z, a-z, 0-9 and _ (it names {names_what})"),
+        ));
+    }
+    if let Some(first) = names.iter().position(|n| *n == name) {
+        return Err(c.invalid(format!("{key}.name"), format!("{name:?}"), taken(first)));
+    }
+    names.push(name);
+    Ok(())
 }

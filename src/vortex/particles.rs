@@ -90,14 +90,7 @@ impl crate::state::Persist for VortexParticles {
     fn restore(&mut self, from: &crate::state::Restorer) -> Result<(), crate::state::StateError> {
         let x = from.vec3s("x")?;
         let n = x.len();
-        self.omega = from.vec3s("omega")?;
-        if self.omega.len() != n {
-            return Err(crate::state::StateError::Mismatch {
-                name: from.path("omega"),
-                found: format!("{} vectors", self.omega.len()),
-                expected: format!("{n}, one per particle"),
-            });
-        }
+        self.omega = from.vec3s_n("omega", n)?;
         self.sigma = from.reals_n("sigma", n)?;
         self.age = from.reals_n("age", n)?;
         self.x = x;

@@ -103,9 +103,10 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "column")]
         reference_csv: Option<PathBuf>,
     },
-    /// A quick look at a run without ParaView: a colour map of one field of its HDF5 frames on
-    /// a plane across an axis (the grid's cells, or the particles of a thin slab as dots), with
-    /// a colour bar, axes in metres and the time in the title.
+    /// A quick look at a run without ParaView: a colour map of one field of its frames (HDF5 or
+    /// VTK) on a plane across an axis (the grid's cells, or the particles of a thin slab as
+    /// dots), with a colour bar and its unit, axes in metres and the time in the title; one
+    /// frame, a numbered series or an animated GIF on one colour range.
     Slice(cli::slice::SliceArgs),
     /// Spectra of a run: the power spectral density of a probe's (or any probes.csv or
     /// metrics.csv column's) time series by Welch's method, with its peak frequency, or the
@@ -140,6 +141,10 @@ fn main() -> ExitCode {
         )
         .with_ansi(std::io::stderr().is_terminal())
         .with_writer(std::io::stderr)
+        // Warnings are for the person at the terminal: the level and the message, no timestamp
+        // or module path.
+        .without_time()
+        .with_target(false)
         .init();
     let command = Cli::parse().command;
     // The command runs on a worker of rayon's pool, not on the main thread: a parallel loop

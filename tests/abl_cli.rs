@@ -174,6 +174,22 @@ fn bad_files_and_arguments_fail_with_a_message() {
     assert!(!csv.exists(), "no CSV from a failed lookup");
     let out = eddy(&["info", cut.to_str().expect("utf-8 path")]);
     assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("not an HDF5 file, or truncated"), "{err}");
+    // A file that is not there is said to be missing, not to be a damaged HDF5 file.
+    let gone = tmp.path().join("gone.h5");
+    let out = eddy(&["info", gone.to_str().expect("utf-8 path")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("gone.h5") && err.contains("No such file") && !err.contains("HDF5"),
+        "{err}"
+    );
+    // A missing scene file: its cause said once.
+    let out = eddy(&["run", "/definitely/not/here.toml", "--plan"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
     let out = eddy(&[
         "lookup",
         db.to_str().expect("utf-8 path"),

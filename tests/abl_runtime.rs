@@ -276,11 +276,21 @@ fn bad_databases_and_turbulence_values_are_refused_clearly() {
             assert!(e.contains(n), "{e:?} does not name {n:?}");
         }
     };
+    // A missing database: the command that writes it, with the obstacle file beside it when
+    // there is one, and the file to write otherwise.
     let missing = common::abl_line(&dir.path().join("none.h5"));
     refused(
         &text(CENTRE, &missing, ""),
-        &["obstacles[0].abl.database", "none.h5", "eddy-precompute"],
+        &[
+            "obstacles[0].abl.database",
+            "none.h5",
+            "obstacle file such as",
+            "none.toml",
+        ],
     );
+    std::fs::write(dir.path().join("none.toml"), "").expect("writes");
+    let beside = format!("eddy-precompute {}", dir.path().join("none.toml").display());
+    refused(&text(CENTRE, &missing, ""), &[&beside, "--out", "none.h5"]);
     for (extra, key) in [
         ("c_p = -1.0", "turbulence.c_p"),
         ("c_p = nan", "turbulence.c_p"),

@@ -252,7 +252,7 @@ fn the_drag_area_is_the_surface_area_as_the_particles_move() {
 /// A scene with `[coupling]` needs both media, values in range and one air density.
 #[test]
 fn coupling_without_both_media_or_out_of_range_is_refused() {
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (
             &["coupling.drag_coefficient=0.5"],
             "coupling.drag_coefficient",
@@ -263,6 +263,9 @@ fn coupling_without_both_media_or_out_of_range_is_refused() {
         ),
         (&["coupling.air_density=0.0"], "coupling.air_density"),
         (&["grid.density=1000.0"], "grid.density"),
+        // Cut cells do not meet the water yet: a ball half under it closed off pockets of the
+        // air's pressure system, and the projection diverged at the first step.
+        (&["grid.obstacle_surface=cut"], "grid.obstacle_surface"),
     ];
     for (overrides, key) in cases {
         let err = scene(FLOATING_BLOCK, overrides).unwrap_err().to_string();

@@ -501,9 +501,39 @@ fn override_errors() {
     let m = message(parse_with(MINIMAL, &["time.end.x=1"]));
     assert_contains(&m, &["`time.end`", "float"]);
 
-    // An override of a key the schema lacks is an unknown-key error like in the file.
+    // An override of a key the schema lacks is an unknown-key error like in the file, told
+    // against the override that wrote it (the file only says on what).
     let m = message(parse_with(MINIMAL, &["time.finish=2"]));
-    assert_contains(&m, &["tiny.toml", "`time.finish`", "unknown key `finish`"]);
+    assert_contains(
+        &m,
+        &[
+            "--set \"time.finish=2\" on ",
+            "tiny.toml",
+            "`time.finish`",
+            "unknown key `finish`",
+        ],
+    );
+    // A value out of range: the last override of the key is the one named; a key that no
+    // override wrote is told against the file alone.
+    let m = message(parse_with(
+        MINIMAL,
+        &["time.cfl=0.5", "time.cfl=2", "time.end=3"],
+    ));
+    assert!(m.starts_with("--set \"time.cfl=2\" on "), "{m}");
+    assert_contains(&m, &["invalid `time.cfl` = 2"]);
+    let m = message(parse_with(
+        MINIMAL,
+        &["obstacles=[{ shape = { type = \"sphere\", radius = -1.0 } }]"],
+    ));
+    assert!(
+        m.starts_with("--set \"obstacles="),
+        "a table holding the key: {m}"
+    );
+    let m = message(parse_with(
+        MINIMAL,
+        &["time.end=3", "domain.max=[1.0, 1.0, -5.0]"],
+    ));
+    assert!(!m.contains("time.end=3"), "{m}");
 
     let m = message(parse_with(MINIMAL, &["fluid.blocks.0.colour=2"]));
     assert_contains(&m, &["`fluid.blocks[0].colour`", "unknown key"]);
@@ -647,5 +677,26 @@ fn compression_is_a_deflate_level() {
             .output
             .compression,
         0
+    );
+}
+
+/// Numbers in messages are written compactly: a domain of 3e300 m gives `3e300`, not 301 digits.
+#[test]
+fn huge_and_tiny_numbers_are_written_with_exponents() {
+    let grid = r#"name = "huge"
+[domain]
+min = [0, 0, 0]
+max = [3e300, 1, 1]
+[time]
+end = 1.0
+[grid]
+resolution = [64, 64, 64]
+"#;
+    let m = message(parse(grid));
+    assert_contains(&m, &["grid.resolution[1]", "cell of 4.6875e298 m"]);
+    assert!(
+        m.split(|c: char| !c.is_ascii_digit())
+            .all(|run| run.len() < 20),
+        "a long run of digits: {m}"
     );
 }

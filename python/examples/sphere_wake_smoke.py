@@ -28,9 +28,12 @@ if args.database:
 scene = eddy.Scene.load("scenes/abl_sphere_wake.toml", overrides=overrides)
 sim = eddy.Simulation(scene, out=args.out)
 sim.run(progress=True)
-print(f"t = {sim.time:.2f} s after {sim.steps} steps, kinetic energy {sim.metrics()['kinetic_energy']:.4g} J")
+energy = sim.metrics()["kinetic_energy"]  # one value a step
+print(f"t = {sim.time:.2f} s after {sim.steps} steps, kinetic energy {energy[-1]:.4g} J "
+      f"(largest {energy.max():.4g} J)")
 
-(x0, y0, z0), h, (nx, ny, nz) = sim.grid_geometry
+grid = sim.grid_geometry  # eddy.GridGeometry(origin, spacing, dims)
+(x0, y0, z0), h, (nx, ny, nz) = grid.origin, grid.spacing, grid.dims
 smoke = sim.smoke[:, :, nz // 2]  # indexed [i, j, k]: x and y at the middle layer of z
 plt.figure(figsize=(8, 4))
 plt.imshow(smoke.T, origin="lower", extent=(x0, x0 + nx * h, y0, y0 + ny * h), cmap="magma")

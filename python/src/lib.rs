@@ -9,13 +9,19 @@
 //! - Arrays are copies: particle counts change between steps (inflow, outflow), so a view into
 //!   the solver's memory could dangle. Writing velocities between steps is safe (the next step
 //!   starts from them, as from a scene's initial velocities); nothing else is writable.
+//! - A field the scene does not have (particles on a grid scene, smoke without a source) reads
+//!   `None`, so `hasattr` and `is None` tell what a scene holds; writing one, or a method asked
+//!   for what the scene lacks, raises `ValueError` saying what it has instead.
 //! - `Database.open(path).lookup(velocity, angular)` looks up many directions at once, in
 //!   parallel without the GIL.
 
 use std::path::PathBuf;
 
 use eddy::abl::AblDatabase;
-use eddy::pipeline::{Kind, Run, RunError, RunOptions};
+use eddy::grid::forces::vorticity;
+use eddy::io::plot::RunSeries;
+use eddy::io::CsvSeries;
+use eddy::pipeline::{Kind, Run, RunError, RunOptions, StepRecord, ABL_FIELD};
 use eddy::{Real, Vec3};
 use eddy_precompute::run::{Engine, Finished, Job, Threads};
 use eddy_precompute::solve::Surface;
@@ -24,7 +30,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyTuple};
 use rayon::prelude::*;
 
 create_exception!(
@@ -50,9 +56,31 @@ fn run_error(e: RunError) -> PyErr {
 
 /// A Python value as the text of a TOML value, as `--set KEY=VALUE` takes it.
 fn toml_text(value: &Bound<'_, PyAny>, key: &str) -> PyResult<String> {
-    let v: toml::Value =
-        pythonize::depythonize(value).map_err(|e| SceneError::new_err(format!("{key}: {e}")))?;
+    let v: toml::Value = pythonize::depythonize(&plain(value)?)
+        .map_err(|e| SceneError::new_err(format!("{key}: {e}")))?;
     Ok(v.to_string())
+}
+
+/// `value` with its NumPy arrays and scalars, at any depth of lists, tuples and dicts, as
+/// their `tolist()`: the Python lists and numbers a scene's TOML is made of.
+fn plain<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let py = value.py();
+    let generic = py.import("numpy")?.getattr("generic")?;
+    if value.is_instance_of::<numpy::PyUntypedArray>() || value.is_instance(&generic)? {
+        return value.call_method0("tolist");
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items = value.try_iter()?.map(|v| plain(&v?));
+        return Ok(PyList::new(py, items.collect::<PyResult<Vec<_>>>()?)?.into_any());
+    }
+    if let Ok(d) = value.cast::<PyDict>() {
+        let out = PyDict::new(py);
+        for (k, v) in d.iter() {
+            out.set_item(k, plain(&v)?)?;
+        }
+        return Ok(out.into_any());
+    }
+    Ok(value.clone())
 }
 
 /// A resolved scene: loaded, overridden and validated.
@@ -84,7 +112,7 @@ impl Scene {
         base: Option<PathBuf>,
         overrides: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let table: toml::Table = pythonize::depythonize(scene.as_any())
+        let table: toml::Table = pythonize::depythonize(&plain(scene.as_any())?)
             .map_err(|e| SceneError::new_err(format!("the scene dict: {e}")))?;
         let text = toml::to_string(&table)
             .map_err(|e| SceneError::new_err(format!("the scene dict: {e}")))?;
@@ -162,23 +190,22 @@ fn rows(array: ArrayView2<'_, Real>, n: usize, what: &str) -> PyResult<Vec<Vec3>
     Ok(v)
 }
 
+/// Components on the grid's cells as one (nx, ny, nz, c) array, indexed [i, j, k, c] as the
+/// frames' vector fields.
+fn stacked<'py>(py: Python<'py>, components: &[Array3<Real>]) -> Bound<'py, PyArray4<Real>> {
+    let views: Vec<_> = components.iter().map(|a| a.view()).collect();
+    numpy::ndarray::stack(Axis(3), &views)
+        .expect("equal shapes")
+        .into_pyarray(py)
+}
+
 impl Simulation {
-    fn sph(&self) -> PyResult<&eddy::sph::SphSolver> {
-        self.run
-            .pipeline
-            .sim
-            .sph
-            .as_ref()
-            .ok_or_else(|| PyValueError::new_err("the scene has no SPH fluid ([fluid])"))
+    fn sph(&self) -> Option<&eddy::sph::SphSolver> {
+        self.run.pipeline.sim.sph.as_ref()
     }
 
-    fn grid(&self) -> PyResult<&eddy::grid::GridSolver> {
-        self.run
-            .pipeline
-            .sim
-            .grid
-            .as_ref()
-            .ok_or_else(|| PyValueError::new_err("the scene has no grid ([grid])"))
+    fn grid(&self) -> Option<&eddy::grid::GridSolver> {
+        self.run.pipeline.sim.grid.as_ref()
     }
 
     /// A run of `scene` into `out`, started or (with `resume`) gone on from its checkpoint,
@@ -193,24 +220,85 @@ impl Simulation {
         let run = py
             .detach(|| Run::begin(inner, &options))
             .map_err(run_error)?;
+        if run.removed_outputs() > 0 {
+            let message = format!(
+                "removed {} output files of an earlier run from {}",
+                run.removed_outputs(),
+                run.out().display()
+            );
+            let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+            PyErr::warn(py, &category, &std::ffi::CString::new(message)?, 1)?;
+        }
         Ok(Simulation { run, dt: 0.0 })
     }
 
-    /// One step with the GIL released, then a check for Ctrl-C; false once the run has ended.
-    fn advance(&mut self, py: Python<'_>) -> PyResult<bool> {
+    /// One step with the GIL released, then a check for Ctrl-C; `None` once the run has
+    /// ended.
+    fn advance(&mut self, py: Python<'_>) -> PyResult<Option<StepRecord>> {
         let run = &mut self.run;
         let rec = py.detach(|| run.advance(None)).map_err(run_error)?;
         py.check_signals()?;
-        match rec {
-            Some(rec) => {
-                self.dt = rec.dt;
-                Ok(true)
-            }
+        match &rec {
+            Some(rec) => self.dt = rec.dt,
             None => {
                 self.run.finish().map_err(run_error)?;
-                Ok(false)
             }
         }
+        Ok(rec)
+    }
+
+    /// The run's series whose files end in `base` (`metrics.csv`, `probes.csv`), each with the
+    /// prefix of its keys: none for a scene's one series, `MEDIUM.` for a coupled scene's two.
+    fn series_named(&self, base: &str) -> Vec<(String, &CsvSeries)> {
+        let file = |s: &CsvSeries| {
+            let name = s.path().file_name().unwrap_or_default();
+            name.to_string_lossy().into_owned()
+        };
+        let named: Vec<_> = self
+            .run
+            .series()
+            .filter(|s| file(s).ends_with(base))
+            .collect();
+        let both = named.len() > 1;
+        named
+            .into_iter()
+            .map(|s| {
+                let name = file(s);
+                let medium = name.strip_suffix(base).unwrap_or("").trim_end_matches('_');
+                let prefix = if both {
+                    format!("{medium}.")
+                } else {
+                    String::new()
+                };
+                (prefix, s)
+            })
+            .collect()
+    }
+
+    /// Every row written so far of the series `base`, as {column: (rows,) array}: read back
+    /// from the files, so a resumed run's history holds the rows before its checkpoint too.
+    fn history<'py>(&self, py: Python<'py>, base: &str) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (prefix, series) in self.series_named(base) {
+            let table = RunSeries::read_csv(series.path())
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            for name in table.columns() {
+                let column = table.column(name).unwrap_or_default();
+                d.set_item(format!("{prefix}{name}"), PyArray1::from_vec(py, column))?;
+            }
+        }
+        Ok(d)
+    }
+
+    /// The last row of the series `base`, as {column: value}; empty before the first step.
+    fn last_row<'py>(&self, py: Python<'py>, base: &str) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (prefix, series) in self.series_named(base) {
+            for (column, value) in series.last_row() {
+                d.set_item(format!("{prefix}{column}"), value)?;
+            }
+        }
+        Ok(d)
     }
 }
 
@@ -249,13 +337,15 @@ impl Simulation {
     /// One step (writing the frame that is due first, as `eddy run`); False, and nothing
     /// done but the end's frame, once the run has reached the scene's end.
     fn step(&mut self, py: Python<'_>) -> PyResult<bool> {
-        self.advance(py)
+        Ok(self.advance(py)?.is_some())
     }
 
     /// Steps until the time reaches `until` (s), or `steps` more steps are taken, or the
     /// scene ends, whichever comes first; with neither, to the scene's end. Steps are never
     /// shortened to land on `until`, so a run in pieces takes the very steps of a run in one.
-    /// Returns the steps taken.
+    /// Returns the steps taken. `progress` draws `eddy run`'s bar on a terminal: the share done
+    /// of the simulated time to go (or of the steps, when they stop the run first), elapsed
+    /// time and ETA.
     #[pyo3(signature = (until = None, steps = None, progress = false))]
     fn run(
         &mut self,
@@ -269,21 +359,16 @@ impl Simulation {
                 "until = {t}: a finite time, s"
             )));
         }
-        let bar = if progress {
-            indicatif::ProgressBar::new(steps.unwrap_or(0))
-        } else {
-            indicatif::ProgressBar::hidden()
-        };
+        let bar = self.run.progress(progress, until, steps);
         let mut taken = 0;
         while until.is_none_or(|t| self.time() < t) && steps.is_none_or(|n| taken < n) {
-            if !self.advance(py)? {
+            let Some(rec) = self.advance(py)? else {
                 break;
-            }
+            };
             taken += 1;
-            bar.inc(1);
-            bar.set_message(format!("t = {:.4} s", self.time()));
+            bar.update(&self.run, &rec);
         }
-        bar.finish_and_clear();
+        bar.finish();
         Ok(taken)
     }
 
@@ -317,77 +402,130 @@ impl Simulation {
         self.run.out().to_path_buf()
     }
 
-    /// The last step's row of `metrics.csv` as {column: value} (a coupled scene's two files
-    /// as keys `particles.COLUMN` and `grid.COLUMN`); empty before the first step.
+    /// The rows of `metrics.csv` written so far, one per step, as {column: (rows,) float64
+    /// array} (a coupled scene's two files as keys `particles.COLUMN` and `grid.COLUMN`);
+    /// empty arrays before the first step, an empty dict when the scene writes no metrics.
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.rows(py, "metrics.csv")
+        self.history(py, "metrics.csv")
     }
 
-    /// The last step's row of `probes.csv`, laid out as [`Self::metrics`].
+    /// The last row of `metrics.csv` as {column: value}, keyed as `metrics()`; empty before
+    /// the first step.
+    fn last_metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.last_row(py, "metrics.csv")
+    }
+
+    /// The rows of `probes.csv` written so far, laid out as `metrics()`.
     fn probes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.rows(py, "probes.csv")
+        self.history(py, "probes.csv")
+    }
+
+    /// The last row of `probes.csv`, laid out as `last_metrics()`.
+    fn last_probes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.last_row(py, "probes.csv")
     }
 
     // ------------------------------------------------------------------ particles
 
-    /// Fluid particle positions, (n, 3) float64, m.
+    /// Fluid particle positions, (n, 3) float64, m; None without an SPH fluid.
     #[getter]
-    fn position<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
-        Ok(vectors(py, &self.sph()?.fluid.x))
+    fn position<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<Real>>> {
+        Some(vectors(py, &self.sph()?.fluid.x))
     }
 
-    /// Fluid particle velocities, (n, 3) float64, m/s.
+    /// Fluid particle velocities, (n, 3) float64, m/s; None without an SPH fluid.
     #[getter]
-    fn velocity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
-        Ok(vectors(py, &self.sph()?.fluid.v))
+    fn velocity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<Real>>> {
+        Some(vectors(py, &self.sph()?.fluid.v))
     }
 
     /// Writes the fluid particles' velocities, (n, 3) m/s; the next step starts from them.
     #[setter]
     fn set_velocity(&mut self, velocity: PyReadonlyArray2<'_, Real>) -> PyResult<()> {
-        let n = self.sph()?.fluid.len();
-        let v = rows(velocity.as_array(), n, "velocity")?;
+        let sph = self.sph().ok_or_else(|| {
+            PyValueError::new_err(
+                "velocity: the scene has no SPH fluid ([fluid]); a grid's velocities are \
+                 written with set_grid_faces",
+            )
+        })?;
+        let v = rows(velocity.as_array(), sph.fluid.len(), "velocity")?;
         let sim = &mut self.run.pipeline.sim;
         sim.sph.as_mut().expect("checked above").fluid.v = v;
         self.run.state_edited();
         Ok(())
     }
 
-    /// Fluid particle densities, (n,) float64, kg/m^3 (as of the last step).
+    /// Fluid particle densities, (n,) float64, kg/m^3 (as of the last step); None without an
+    /// SPH fluid.
     #[getter]
-    fn density<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<Real>>> {
-        Ok(PyArray1::from_slice(py, &self.sph()?.fluid.density))
+    fn density<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<Real>>> {
+        Some(PyArray1::from_slice(py, &self.sph()?.fluid.density))
     }
 
-    /// Fluid particle pressures, (n,) float64, Pa (as of the last step).
+    /// Fluid particle pressures, (n,) float64, Pa (as of the last step); None without an SPH
+    /// fluid.
     #[getter]
-    fn pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<Real>>> {
-        Ok(PyArray1::from_slice(py, &self.sph()?.fluid.pressure))
+    fn pressure<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<Real>>> {
+        Some(PyArray1::from_slice(py, &self.sph()?.fluid.pressure))
     }
 
-    /// The SPH curl of the fluid's velocity, (n, 3) float64, 1/s.
+    /// The SPH curl of the fluid's velocity, (n, 3) float64, 1/s; None without an SPH fluid
+    /// (a grid's is `grid_vorticity`).
     #[getter]
-    fn vorticity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
-        Ok(vectors(py, &self.sph()?.vorticity()))
+    fn vorticity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<Real>>> {
+        Some(vectors(py, &self.sph()?.vorticity()))
+    }
+
+    /// The boundary-layer vorticity omega_ABL each fluid particle carries, (n, 3) float64,
+    /// 1/s, as the particle frames' `abl_vorticity`; None without boundary layers on the
+    /// particles (a grid's is `grid_abl_vorticity`).
+    #[getter]
+    fn abl_vorticity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<Real>>> {
+        let carried = &self.sph()?.fluid.carried;
+        let (_, omega) = carried.iter().find(|(name, _)| *name == ABL_FIELD)?;
+        Some(vectors(py, omega))
     }
 
     // ------------------------------------------------------------------ grid
 
-    /// Cell-centred grid velocity, (nx, ny, nz, 3) float64, m/s, indexed [i, j, k].
+    /// Cell-centred grid velocity, (nx, ny, nz, 3) float64, m/s, indexed [i, j, k, component];
+    /// None without a grid.
     #[getter]
-    fn grid_velocity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray4<Real>>> {
-        let [u, v, w] = self.grid()?.mac.cell_velocity();
-        let views = [u.view(), v.view(), w.view()];
-        let stacked = numpy::ndarray::stack(Axis(3), &views).expect("equal shapes");
-        Ok(stacked.into_pyarray(py))
+    fn grid_velocity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray4<Real>>> {
+        Some(stacked(py, &self.grid()?.mac.cell_velocity()))
+    }
+
+    /// Cell-centred grid vorticity, (nx, ny, nz, 3) float64, 1/s, as the grid frames'
+    /// `vorticity`: central differences of `grid_velocity` (one-sided at the ends of an axis
+    /// that does not wrap); None without a grid.
+    #[getter]
+    fn grid_vorticity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray4<Real>>> {
+        Some(stacked(py, &vorticity(&self.grid()?.mac)))
+    }
+
+    /// The boundary-layer vorticity omega_ABL on the grid's cells, (nx, ny, nz, 3) float64,
+    /// 1/s, as the grid frames' `abl_vorticity`; None without boundary layers on the grid.
+    #[getter]
+    fn grid_abl_vorticity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray4<Real>>> {
+        let turbulence = self.run.pipeline.sim.grid_turbulence.as_ref()?;
+        Some(stacked(py, turbulence.abl.as_ref()?))
+    }
+
+    /// The cells the grid's fluid does not hold, (nx, ny, nz) bool: those inside obstacles
+    /// (and under a coupled liquid), as the grid frames' `solid`; None without a grid.
+    #[getter]
+    fn grid_solid<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<bool>>> {
+        let fluid = self.grid()?.bounds.fluid_mask();
+        Some(fluid.mapv(|f| !f).into_pyarray(py))
     }
 
     /// Face velocities of the MAC grid: three arrays, the x faces (nx + 1, ny, nz), the y
-    /// faces (nx, ny + 1, nz) and the z faces (nx, ny, nz + 1), float64, m/s.
+    /// faces (nx, ny + 1, nz) and the z faces (nx, ny, nz + 1), float64, m/s; None without a
+    /// grid.
     #[getter]
-    fn grid_faces<'py>(&self, py: Python<'py>) -> PyResult<[Bound<'py, PyArray3<Real>>; 3]> {
+    fn grid_faces<'py>(&self, py: Python<'py>) -> Option<[Bound<'py, PyArray3<Real>>; 3]> {
         let u = &self.grid()?.mac.u;
-        Ok([0, 1, 2].map(|a| u[a].clone().into_pyarray(py)))
+        Some([0, 1, 2].map(|a| u[a].clone().into_pyarray(py)))
     }
 
     /// Writes the face velocities (shapes as `grid_faces`), m/s, then the walls' and
@@ -399,39 +537,53 @@ impl Simulation {
         y: numpy::PyReadonlyArray3<'_, Real>,
         z: numpy::PyReadonlyArray3<'_, Real>,
     ) -> PyResult<()> {
-        self.grid()?;
         let sim = &mut self.run.pipeline.sim;
-        let grid = sim.grid.as_mut().expect("checked above");
+        let grid = sim.grid.as_mut().ok_or_else(|| {
+            PyValueError::new_err(
+                "grid faces: the scene has no grid ([grid]); SPH particles' velocities are \
+                 written to `velocity`",
+            )
+        })?;
         grid.set_faces([x.as_array(), y.as_array(), z.as_array()])
             .map_err(|e| PyValueError::new_err(format!("grid faces: {e}")))?;
         self.run.state_edited();
         Ok(())
     }
 
-    /// Cell pressure, (nx, ny, nz) float64, Pa (kinematic with `grid.density` 1).
+    /// Cell pressure, (nx, ny, nz) float64, Pa (kinematic with `grid.density` 1); None without
+    /// a grid.
     #[getter]
-    fn grid_pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<Real>>> {
-        Ok(self.grid()?.pressure.clone().into_pyarray(py))
+    fn grid_pressure<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<Real>>> {
+        Some(self.grid()?.pressure.clone().into_pyarray(py))
     }
 
-    /// Smoke density per flow cell, (nx, ny, nz) float64; None without smoke.
+    /// Smoke density per flow cell, (nx, ny, nz) float64, indexed [i, j, k] (cell means of a
+    /// finer smoke grid); None without smoke.
     #[getter]
-    fn smoke<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<Real>>>> {
-        let smoke = self.grid()?.smoke.as_ref();
-        Ok(smoke.map(|s| s.on_flow_cells(&s.density).into_owned().into_pyarray(py)))
+    fn smoke<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<Real>>> {
+        let s = self.grid()?.smoke.as_ref()?;
+        Some(s.on_flow_cells(&s.density).into_owned().into_pyarray(py))
     }
 
-    /// The grid's origin (m), cell size (m) and cells along x, y, z.
+    /// The grid's lattice as `eddy.GridGeometry(origin, spacing, dims)`: cell (i, j, k) spans
+    /// origin + spacing * [i, i + 1] x [j, j + 1] x [k, k + 1] (m), as the grid frames' root
+    /// attributes; None without a grid.
     #[getter]
-    fn grid_geometry(&self) -> PyResult<([Real; 3], Real, [usize; 3])> {
-        let mac = &self.grid()?.mac;
-        Ok(([mac.origin.x, mac.origin.y, mac.origin.z], mac.dx, mac.dims))
+    fn grid_geometry<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(grid) = self.grid() else {
+            return Ok(None);
+        };
+        let (o, [nx, ny, nz]) = (grid.mac.origin, grid.mac.dims);
+        let class = py.import("eddy")?.getattr("GridGeometry")?;
+        let geometry = class.call1(((o.x, o.y, o.z), grid.mac.dx, (nx, ny, nz)))?;
+        Ok(Some(geometry))
     }
 
     // ------------------------------------------------------------------ vortex particles
 
     /// The vortex particles of `medium` ("grid" or "particles"; default: the scene's one set)
-    /// as {"position", "vorticity" (n, 3), "radius", "energy", "age" (n,)}.
+    /// as {"position", "vorticity" (n, 3), "radius", "energy", "age" (n,)}. A scene without
+    /// them in that medium raises `ValueError` naming the medium that has them, if any.
     #[pyo3(signature = (medium = None))]
     fn vortices<'py>(&self, py: Python<'py>, medium: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
         let sim = &self.run.pipeline.sim;
@@ -439,26 +591,40 @@ impl Simulation {
             ("grid", &sim.grid_turbulence),
             ("particles", &sim.sph_turbulence),
         ];
-        let have: Vec<_> = sets.iter().filter(|(_, t)| t.is_some()).collect();
-        let chosen = match medium {
-            Some(m) => sets.iter().find(|(name, _)| *name == m).ok_or_else(|| {
-                PyValueError::new_err(format!("medium {m:?}: \"grid\" or \"particles\""))
-            })?,
-            None if have.len() == 1 => have[0],
-            None if have.is_empty() => &sets[0],
-            None => {
+        let have: Vec<_> = sets
+            .iter()
+            .filter_map(|(m, t)| Some((*m, t.as_ref()?)))
+            .collect();
+        let t = match (medium, have.as_slice()) {
+            (Some(m), _) if sets.iter().all(|(name, _)| *name != m) => {
+                return Err(PyValueError::new_err(format!(
+                    "medium {m:?}: \"grid\" or \"particles\""
+                )))
+            }
+            (_, []) => {
+                return Err(PyValueError::new_err(
+                    "the scene has no vortex particles: no obstacle has a boundary-layer \
+                     database (`abl.database` of an obstacle)",
+                ))
+            }
+            (Some(m), _) => match have.iter().find(|(name, _)| *name == m) {
+                Some((_, t)) => *t,
+                None => {
+                    let other = have[0].0;
+                    return Err(PyValueError::new_err(format!(
+                        "the scene has no vortex particles in medium {m:?}: its boundary \
+                         layers are on the {other}; ask for vortices(\"{other}\")"
+                    )));
+                }
+            },
+            (None, [(_, t)]) => *t,
+            (None, _) => {
                 return Err(PyValueError::new_err(
                     "the scene has vortex particles in both media: pass medium=\"grid\" or \
                      \"particles\"",
                 ))
             }
         };
-        let t = chosen.1.as_ref().ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "the scene has no vortex particles in {:?} (no obstacle with a database)",
-                chosen.0
-            ))
-        })?;
         let p = &t.vortices;
         let d = PyDict::new(py);
         d.set_item("position", vectors(py, &p.x))?;
@@ -512,18 +678,12 @@ impl Simulation {
             return Ok(None);
         };
         let f = stats.fields();
-        let stack = |c: &[Array3<Real>]| {
-            let views: Vec<_> = c.iter().map(|a| a.view()).collect();
-            numpy::ndarray::stack(Axis(3), &views)
-                .expect("equal shapes")
-                .into_pyarray(py)
-        };
         let l = &stats.lattice;
         let d = PyDict::new(py);
-        d.set_item("mean_velocity", stack(&f.mean_velocity))?;
-        d.set_item("reynolds_stress", stack(&f.reynolds_stress))?;
+        d.set_item("mean_velocity", stacked(py, &f.mean_velocity))?;
+        d.set_item("reynolds_stress", stacked(py, &f.reynolds_stress))?;
         d.set_item("k", f.k.into_pyarray(py))?;
-        d.set_item("mean_vorticity", stack(&f.mean_vorticity))?;
+        d.set_item("mean_vorticity", stacked(py, &f.mean_vorticity))?;
         d.set_item("mean_enstrophy", f.mean_enstrophy.into_pyarray(py))?;
         d.set_item("samples", f.samples.into_pyarray(py))?;
         d.set_item("origin", [l.origin.x, l.origin.y, l.origin.z])?;
@@ -542,33 +702,6 @@ impl Simulation {
             self.steps(),
             self.run.out()
         )
-    }
-}
-
-impl Simulation {
-    /// The last rows of the series whose files end in `base`, keyed by column (prefixed by the
-    /// medium when there are two).
-    fn rows<'py>(&self, py: Python<'py>, base: &str) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        let series: Vec<_> = self
-            .run
-            .last_rows()
-            .into_iter()
-            .filter(|(file, _)| file.ends_with(base))
-            .collect();
-        let both = series.len() > 1;
-        for (file, row) in series {
-            let prefix = file.strip_suffix(base).unwrap_or("").trim_end_matches('_');
-            for (column, value) in row {
-                let key = if both {
-                    format!("{prefix}.{column}")
-                } else {
-                    column
-                };
-                d.set_item(key, value)?;
-            }
-        }
-        Ok(d)
     }
 }
 
@@ -754,5 +887,6 @@ fn _eddy(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Database>()?;
     m.add_function(wrap_pyfunction!(precompute, m)?)?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

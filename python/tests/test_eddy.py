@@ -6,10 +6,15 @@ is the one `cargo test --release` built (target/release/eddy, or $EDDY_BIN).
 """
 
 import csv
+import fcntl
 import io
 import os
 import pathlib
+import pty
+import re
+import struct
 import subprocess
+import termios
 import time
 import tomllib
 
@@ -63,8 +68,18 @@ def test_a_run_from_python_equals_the_cli_bit_for_bit(tmp_path, scene, overrides
     assert len(want) > 3
     assert rows(tmp_path / "one" / "metrics.csv") == want
     assert rows(tmp_path / "pieces" / "metrics.csv") == want
-    last = sim.metrics()
-    assert last["step"] == sim.steps - 1 and last["time"] + last["dt"] == pytest.approx(sim.time)
+    # The metrics' history is the file's table, a row a step; its last row is last_metrics().
+    history = sim.metrics()
+    with open(tmp_path / "one" / "metrics.csv") as f:
+        columns = next(csv.reader(f))
+    table = np.loadtxt(tmp_path / "one" / "metrics.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert list(history) == columns
+    for i, name in enumerate(columns):
+        assert history[name].dtype == np.float64 and np.array_equal(history[name], table[:, i]), name
+    assert np.array_equal(history["step"], np.arange(sim.steps)) and np.all(np.diff(history["time"]) > 0)
+    last = sim.last_metrics()
+    assert last == {name: column[-1] for name, column in history.items()}
+    assert last["time"] + last["dt"] == pytest.approx(sim.time)
     assert sorted(p.name for p in (tmp_path / "one").iterdir()) == sorted(
         p.name for p in (tmp_path / "cli").iterdir())
 
@@ -85,6 +100,8 @@ def test_a_saved_run_resumed_from_python_ends_as_the_run_that_never_stopped(tmp_
     assert np.array_equal(resumed.position, whole.position)
     assert np.array_equal(resumed.velocity, whole.velocity)
     assert rows(tmp_path / "stopped" / "metrics.csv") == rows(tmp_path / "whole" / "metrics.csv")
+    # The history holds the rows before the checkpoint too: those are the file's.
+    assert np.array_equal(resumed.metrics()["time"], whole.metrics()["time"])
     other = eddy.Scene.load(SCENES / "dam_break.toml", overrides={"fluid.spacing": 0.05})
     with pytest.raises(RuntimeError, match="another scene"):
         eddy.Simulation.resume(other, out=tmp_path / "stopped")
@@ -94,8 +111,8 @@ def test_particle_arrays_have_the_documented_shapes_and_units(tmp_path):
     sim = eddy.Simulation(eddy.Scene.load(SCENES / "dam_break.toml", overrides={"time.end": 0.02}),
                           out=tmp_path)
     sim.step()
-    n = sim.metrics()["particles"] if "particles" in sim.metrics() else len(sim.position)
-    assert n == 12500
+    n = len(sim.position)
+    assert n == 12500 and sim.metrics()["particles"].tolist() == [n]
     for name, shape in [("position", (n, 3)), ("velocity", (n, 3)), ("vorticity", (n, 3)),
                         ("density", (n,)), ("pressure", (n,))]:
         a = getattr(sim, name)
@@ -105,28 +122,146 @@ def test_particle_arrays_have_the_documented_shapes_and_units(tmp_path):
     # Under gravity the water starts to fall: velocities point down after a step.
     assert sim.velocity[:, 1].mean() < 0
     assert sim.dt > 0 and sim.time == pytest.approx(sim.dt)
+    # What the scene does not have reads None, and writing it says what to write instead.
+    for name in ("grid_velocity", "grid_vorticity", "grid_abl_vorticity", "grid_solid", "grid_faces",
+                 "grid_pressure", "grid_geometry", "smoke", "abl_vorticity"):
+        assert getattr(sim, name) is None, name
+    with pytest.raises(ValueError, match=r"grid faces: the scene has no grid .*`velocity`"):
+        sim.set_grid_faces(*[np.zeros((2, 2, 2))] * 3)
 
 
-def test_grid_arrays_have_the_documented_shapes(tmp_path, sphere):
-    overrides = {"time.end": 0.3, "obstacles.0.abl.database": str(sphere)}
+def test_grid_fields_have_the_documented_shapes_and_equal_the_last_frame(tmp_path, sphere):
+    h5py = pytest.importorskip("h5py")
+    overrides = {"time.end": 0.3, "obstacles.0.abl.database": str(sphere), "output.hdf5": True,
+                 "output.vtk": False}
     sim = eddy.Simulation(eddy.Scene.load(SCENES / "abl_sphere_wake.toml", overrides=overrides),
                           out=tmp_path)
     sim.run()
-    origin, h, (nx, ny, nz) = sim.grid_geometry
-    assert (nx, ny, nz) == (64, 32, 32) and h == pytest.approx(6.0 / 64)
-    assert sim.grid_velocity.shape == (nx, ny, nz, 3)
+    g = sim.grid_geometry
+    assert isinstance(g, eddy.GridGeometry) and g == ((0.0, 0.0, 0.0), 6.0 / 64, (64, 32, 32))
+    nx, ny, nz = g.dims
+    fields = {"velocity": sim.grid_velocity, "vorticity": sim.grid_vorticity,
+              "pressure": sim.grid_pressure, "solid": sim.grid_solid,
+              "abl_vorticity": sim.grid_abl_vorticity, "smoke": sim.smoke}
+    for name, shape in [("velocity", (nx, ny, nz, 3)), ("vorticity", (nx, ny, nz, 3)),
+                        ("abl_vorticity", (nx, ny, nz, 3)), ("pressure", (nx, ny, nz)),
+                        ("smoke", (nx, ny, nz))]:
+        assert fields[name].shape == shape and fields[name].dtype == np.float64, name
     fx, fy, fz = sim.grid_faces
     assert fx.shape == (nx + 1, ny, nz) and fy.shape == (nx, ny + 1, nz) and fz.shape == (nx, ny, nz + 1)
     # Cell velocity is the mean of the two faces of a cell.
-    assert np.allclose(sim.grid_velocity[..., 0], 0.5 * (fx[1:] + fx[:-1]))
-    assert sim.grid_pressure.shape == (nx, ny, nz)
-    assert sim.smoke.shape == (nx, ny, nz) and sim.smoke.max() > 0
+    assert np.allclose(fields["velocity"][..., 0], 0.5 * (fx[1:] + fx[:-1]))
+    assert fields["smoke"].max() > 0 and np.abs(fields["abl_vorticity"]).max() > 0
     v = sim.vortices()
     k = len(v["radius"])
     assert v["position"].shape == (k, 3) and v["vorticity"].shape == (k, 3)
     assert v["energy"].shape == (k,) and v["age"].shape == (k,)
-    with pytest.raises(ValueError, match="no SPH fluid"):
-        sim.position
+    with pytest.raises(ValueError, match=r'boundary layers are on the grid; ask for vortices\("grid"\)'):
+        sim.vortices("particles")
+    # A grid scene has no particles: their fields read None (so hasattr says True).
+    for name in ("position", "velocity", "density", "pressure", "vorticity", "abl_vorticity"):
+        assert getattr(sim, name) is None, name
+    with pytest.raises(ValueError, match="no SPH fluid.*set_grid_faces"):
+        sim.velocity = np.zeros((3, 3))
+    del sim
+    # Every field is the end's frame, as h5py reads it: the same axes, the same values.
+    with h5py.File(tmp_path / "frames.h5", "r") as f:
+        last = f["frames"][max(f["frames"])]
+        for name, a in fields.items():
+            stored = last[name][()]
+            assert np.array_equal(a, stored > 0.5 if name == "solid" else stored), name
+    # The solid cells are the sphere's (radius 0.5 at (1.5, 1.5, 1.5)) to within a cell.
+    solid = fields["solid"]
+    centres = [o + (np.arange(n) + 0.5) * g.spacing for o, n in zip(g.origin, g.dims)]
+    x, y, z = np.meshgrid(*centres, indexing="ij")
+    r = np.sqrt((x - 1.5) ** 2 + (y - 1.5) ** 2 + (z - 1.5) ** 2)
+    assert solid.dtype == bool and solid[r < 0.5 - g.spacing].all() and not solid[r > 0.5 + g.spacing].any()
+
+
+def central(f, axis, h):
+    """The central difference of f along a periodic axis (one cell: zero, as the solver's)."""
+    if f.shape[axis] == 1:
+        return np.zeros_like(f)
+    return (np.roll(f, -1, axis) - np.roll(f, 1, axis)) / (2 * h)
+
+
+def test_grid_vorticity_is_the_curl_of_the_grid_velocity(tmp_path):
+    overrides = {"grid.resolution": [16, 16, 1], "domain.max": [2 * np.pi, 2 * np.pi, 2 * np.pi / 16]}
+    sim = eddy.Simulation(eddy.Scene.load(SCENES / "taylor_green.toml", overrides=overrides),
+                          out=tmp_path)
+    h = sim.grid_geometry.spacing
+    # The Taylor-Green vortex: central differences of the cell velocity on the periodic grid.
+    u, v, w = np.moveaxis(sim.grid_velocity, -1, 0)
+    d = lambda f, axis: central(f, axis, h)
+    curl = np.stack([d(w, 1) - d(v, 2), d(u, 2) - d(w, 0), d(v, 0) - d(u, 1)], axis=-1)
+    assert np.abs(curl).max() > 0.5
+    assert np.allclose(sim.grid_vorticity, curl, rtol=0, atol=1e-12)
+    # A solid-body rotation at rate 2 about the z axis: vorticity 2 x 2 away from the seam.
+    (x0, y0, _), _, (nx, ny, nz) = sim.grid_geometry
+    xf, yf = x0 + np.arange(nx + 1) * h, y0 + np.arange(ny + 1) * h
+    xc, yc = xf[:-1] + 0.5 * h, yf[:-1] + 0.5 * h
+    fx = np.broadcast_to(-2.0 * (yc - np.pi)[None, :, None], (nx + 1, ny, nz))
+    fy = np.broadcast_to(2.0 * (xc - np.pi)[:, None, None], (nx, ny + 1, nz))
+    sim.set_grid_faces(np.ascontiguousarray(fx), np.ascontiguousarray(fy), np.zeros((nx, ny, nz + 1)))
+    omega = sim.grid_vorticity[1:-1, 1:-1]
+    assert np.allclose(omega[..., 2], 4.0, rtol=1e-12) and np.allclose(omega[..., :2], 0.0, atol=1e-12)
+
+
+def test_numpy_values_override_as_lists_and_numbers_do(tmp_path):
+    lists = {"time.end": 0.3, "output.interval": 0.1, "grid.resolution": [32, 32, 1],
+             "domain.max": [6.283185307179586, 6.283185307179586, 0.19634954084936207],
+             "grid.reflection": True}
+    arrays = {"time.end": np.float64(0.3), "output.interval": np.array(0.1),
+              "grid.resolution": np.array([32, 32, 1]), "domain.max": np.array(lists["domain.max"]),
+              "grid.reflection": np.bool_(True)}
+    runs = {}
+    for name, overrides in [("lists", lists), ("arrays", arrays)]:
+        scene = eddy.Scene.load(SCENES / "taylor_green.toml", overrides=overrides)
+        runs[name] = scene.to_toml()
+        eddy.Simulation(scene, out=tmp_path / name).run()
+    assert runs["arrays"] == runs["lists"]
+    assert rows(tmp_path / "arrays" / "metrics.csv") == rows(tmp_path / "lists" / "metrics.csv")
+    # A scene dict may hold NumPy values too (NumPy integers in a list among them).
+    table = tomllib.loads((SCENES / "taylor_green.toml").read_text())
+    table["grid"]["resolution"] = [np.int64(32), np.int32(32), 1]
+    table["time"]["end"] = np.float64(0.3)
+    table["domain"]["max"] = np.array(lists["domain.max"])
+    table["output"]["interval"] = 0.1
+    assert eddy.Scene.from_dict(table).to_toml() == runs["lists"]
+    with pytest.raises(eddy.SceneError, match="grid.resolution"):
+        eddy.Scene.load(SCENES / "taylor_green.toml", overrides={"grid.resolution": np.array([1j])})
+
+
+def test_progress_draws_the_share_of_time_elapsed_and_eta_on_a_terminal(tmp_path):
+    """run(progress=True) draws eddy run's bar on a terminal: elapsed time, percent of the
+    simulated time to go, ETA and the step's time (not a count over a length of 0)."""
+    script = ("import eddy, math, sys\n"
+              "small = {'grid.resolution': [16, 16, 1], 'domain.max': [2 * math.pi, 2 * math.pi, math.pi / 8]}\n"
+              "scene = eddy.Scene.load(sys.argv[1], overrides=small)\n"
+              "eddy.Simulation(scene, out=sys.argv[2]).run(until=0.5, progress=True)\n")
+    terminal, child_end = pty.openpty()
+    fcntl.ioctl(child_end, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 160, 0, 0))
+    child = subprocess.Popen([os.sys.executable, "-c", script, SCENES / "taylor_green.toml", tmp_path],
+                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=child_end)
+    os.close(child_end)
+    drawn = b""
+    while True:
+        try:
+            chunk = os.read(terminal, 4096)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        drawn += chunk
+    os.close(terminal)
+    assert child.wait() == 0, drawn
+    assert re.search(r"\[\d\d:\d\d:\d\d\] .*\d+% ETA \d+s t = 0\.\d{4} s, step \d+",
+                     drawn.decode(errors="replace")), drawn
+
+
+def test_the_version_is_the_crates():
+    for manifest in (ROOT / "Cargo.toml", ROOT / "python" / "Cargo.toml"):
+        assert eddy.__version__ == tomllib.loads(manifest.read_text())["package"]["version"]
 
 
 def test_written_particle_velocities_run_as_the_cli_with_that_initial_field(tmp_path):
@@ -232,8 +367,7 @@ def test_bad_input_is_raised_naming_what_is_wrong(tmp_path):
         sim.velocity = np.zeros((3, 3))
     with pytest.raises(ValueError, match="finite"):
         sim.velocity = np.full((12500, 3), np.nan)
-    with pytest.raises(ValueError, match="no grid"):
-        sim.grid_pressure
+    assert sim.grid_pressure is None
     with pytest.raises(eddy.SceneError):
         eddy.Database.open(tmp_path / "none.h5")
 
@@ -297,3 +431,15 @@ def test_statistics_are_the_files_arrays_with_their_lattice(tmp_path):
     assert np.all(s["k"] >= 0)
     with pytest.raises(ValueError, match="medium"):
         sim.statistics("particles")
+
+
+def test_a_run_into_an_earlier_run_s_folder_says_what_it_removed(tmp_path):
+    """Starting a run removes the earlier run's outputs from its folder, and says so."""
+    scene = eddy.Scene.load(SCENES / "taylor_green.toml", overrides={
+        "time.end": 0.1, "output.interval": 0.1, "grid.resolution": [16, 16, 1],
+        "domain.max": [6.283185307179586, 6.283185307179586, 0.39269908169872414]})
+    eddy.Simulation(scene, out=tmp_path).run()
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.warns(UserWarning, match=r"removed \d+ output files of an earlier run"):
+        eddy.Simulation(scene, out=tmp_path)
+    assert (tmp_path / "notes.txt").read_text() == "mine"

@@ -5,6 +5,12 @@ use std::path::PathBuf;
 /// Why a database could not be read, written or used.
 #[derive(Debug, thiserror::Error)]
 pub enum AblError {
+    /// There is no file at the path (or it cannot be read at all).
+    #[error("cannot open {} as an ABL database: {cause}", .path.display())]
+    Missing {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
     /// HDF5 could not open the file at all.
     #[error(
         "cannot open {} as an ABL database: not an HDF5 file, or truncated ({message})",

@@ -309,6 +309,11 @@ impl AblData {
     /// Reads a database or a shard of one, checking its format, version and array shapes (not
     /// its completeness: see [`super::AblDatabase::open`]).
     pub fn read(path: &Path) -> Result<Self, AblError> {
+        // HDF5 says "not an HDF5 file" of a file that is not there: ask the file system first.
+        std::fs::metadata(path).map_err(|cause| AblError::Missing {
+            path: path.to_path_buf(),
+            cause,
+        })?;
         let file = File::open(path).map_err(|e| AblError::Unreadable {
             path: path.to_path_buf(),
             message: e.to_string(),

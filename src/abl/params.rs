@@ -57,7 +57,7 @@ pub struct TurbulenceParams {
     #[serde(default = "d_r_max")]
     pub r_max: Real,
     /// Particles with a smaller radius are dissipated, in cells or spacings. Default: 2 cells
-    /// on a grid (section 4.2), 1 spacing on SPH particles ([`TurbulenceParams::dissipation`]).
+    /// on a grid (section 4.2), 1 spacing on SPH particles.
     #[serde(default)]
     pub dissipation_radius: Option<Real>,
     /// Particles with a radius at most this (cells) are in the inertial subrange and split;

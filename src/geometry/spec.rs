@@ -32,7 +32,7 @@ pub struct Body {
     pub abl: Option<AblLink>,
     /// Kinematic viscosity of this body's wall against the SPH fluid (Liu et al. 2021 Eq. 4
     /// over the body's samples), m^2/s: equal to `viscosity.kinematic` for a no-slip wall
-    /// (`sph::boundary::no_slip_gain`), 0 for free slip; `viscosity.boundary` when left out.
+    /// (scaled so a steady shear flow feels no net force at the wall), 0 for free slip; `viscosity.boundary` when left out.
     /// Lets one scene hold a no-slip cylinder between free-slip slab walls (SPH scenes only;
     /// the grid's walls are set by `grid.boundary`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -594,6 +594,12 @@ impl GridSolver {
     /// (2 P(u) - u), advect that by the projected field for the second half and project again.
     /// It costs a second projection and removes most of the energy that the first-order
     /// advect-then-project splitting loses.
+    ///
+    /// The pressure kept for probes, forces and frames is the step's whole pressure, the one
+    /// whose gradient over `dt` is the impulse both projections gave: the reflection applies
+    /// the first projection's impulse twice and the second projects over half a step, so it is
+    /// p1 + p2 / 2. Neither projection's own pressure is: under gravity the first is twice the
+    /// hydrostatic pressure and the second minus twice it.
     fn reflected_update(&mut self, dt: Real, stats: &mut GridStepStats) -> Result<(), GridError> {
         let scheme = self.params.advection;
         let half = 0.5 * dt;
@@ -604,6 +610,7 @@ impl GridSolver {
         let t1 = Instant::now();
         let first = self.project(half)?;
         let mut elapsed = t1.elapsed().as_secs_f64();
+        let first_pressure = self.pressure.clone();
         let mut projected = self.mac.clone();
         self.bounds
             .extrapolate_into_obstacles(&mut projected, EXTRAPOLATION_LAYERS);
@@ -628,6 +635,9 @@ impl GridSolver {
         let t2 = Instant::now();
         let second = self.project(half)?;
         elapsed += t2.elapsed().as_secs_f64();
+        Zip::from(&mut self.pressure)
+            .and(&first_pressure)
+            .par_for_each(|p, &p1| *p = p1 + 0.5 * *p);
         stats.project_seconds = elapsed;
         stats.pressure_iterations = first.iterations + second.iterations;
         stats.pressure_residual = second.relative_residual;

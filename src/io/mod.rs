@@ -22,6 +22,7 @@ pub mod slice;
 pub mod spectrum_plot;
 mod vti;
 mod vtk;
+mod vtk_read;
 mod vtk_xml;
 mod xdmf;
 mod zlib;

@@ -15,7 +15,7 @@ use super::plan::Plan;
 use super::simulation::StepError;
 use super::stages::StepRecord;
 use super::{output_dir, RunError, RunOptions, RunSummary};
-use crate::io::{write_atomic, write_checkpoint, IoError};
+use crate::io::{write_atomic, write_checkpoint, CsvSeries, IoError};
 use crate::scene::Scene;
 use crate::stepping::towards_end;
 use crate::Real;
@@ -36,16 +36,23 @@ struct End {
 /// after the step in progress and ends the run with [`RunError::Interrupted`].
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
     let mut run = Run::begin(scene, options)?;
-    let bar = progress_bar(options.progress, &run.end);
+    if run.removed_outputs() > 0 {
+        tracing::warn!(
+            "removed {} output files of an earlier run from {}",
+            run.removed_outputs(),
+            run.out.display()
+        );
+    }
+    let bar = run.progress(options.progress, None, None);
     let mut trace = Vec::new();
     while let Some(rec) = run.advance(options.trace.then_some(&mut trace))? {
-        update_bar(&bar, &run.end, &run.pipeline, &rec);
+        bar.update(&run, &rec);
         if options
             .stop
             .as_ref()
             .is_some_and(|s| s.load(Ordering::SeqCst))
         {
-            bar.finish_and_clear();
+            bar.finish();
             run.checkpoint()?;
             let sim = &run.pipeline.sim;
             return Err(RunError::Interrupted {
@@ -56,7 +63,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
             });
         }
     }
-    bar.finish_and_clear();
+    bar.finish();
     let mut summary = run.finish()?;
     summary.trace = trace;
     Ok(summary)
@@ -80,6 +87,8 @@ pub struct Run {
     /// The scene as checkpoints record it (see `checkpoint::comparable`).
     scene_key: String,
     checkpoints: Schedule,
+    /// Files of an earlier run that starting this one removed from the output folder.
+    removed_outputs: usize,
 }
 
 /// When checkpoints are written: every `interval` s of simulated time, every `every` of wall
@@ -135,19 +144,15 @@ impl Run {
             source: e,
         })?;
         let removed = remove_earlier_outputs(&out)?;
-        if removed > 0 {
-            tracing::warn!(
-                "removed {removed} output files of an earlier run from {}",
-                out.display()
-            );
-        }
         let resolved = scene.to_toml();
         write_atomic(&out.join(SCENE_FILE), |w| w.write_all(resolved.as_bytes()))?;
         // A scene that cannot be built (no fluid cell, a stored flow on another grid) has
         // written no frame: its error says what is wrong and nothing about frames.
         let mut pipeline = Pipeline::build(scene)?;
         pipeline.open(&out)?;
-        Ok(Run::assemble(pipeline, scene, out, 0, started))
+        let mut run = Run::assemble(pipeline, scene, out, 0, started);
+        run.removed_outputs = removed;
+        Ok(run)
     }
 
     /// [`Run::resume`] with [`RunOptions::resume`], else [`Run::start`].
@@ -205,6 +210,7 @@ impl Run {
             started,
             scene_key: checkpoint::comparable(scene),
             checkpoints,
+            removed_outputs: 0,
         }
     }
 
@@ -287,17 +293,25 @@ impl Run {
         &self.plan
     }
 
-    /// The last row of each CSV series the run writes (metrics, probes), by file name.
-    pub fn last_rows(&self) -> Vec<(String, Vec<(String, Real)>)> {
-        let stages = self.pipeline.stages.iter();
-        stages
-            .filter_map(|s| s.series())
-            .map(|csv| {
-                let file = csv.path().file_name().unwrap_or_default();
-                let row = csv.last_row().map(|(k, v)| (k.to_owned(), v)).collect();
-                (file.to_string_lossy().into_owned(), row)
-            })
-            .collect()
+    /// How many files of an earlier run starting this one removed from its output folder
+    /// (frames, series, statistics, a checkpoint; nothing else in the folder is touched).
+    pub fn removed_outputs(&self) -> usize {
+        self.removed_outputs
+    }
+
+    /// The CSV series the run writes (metrics, probes), row by row as it steps.
+    pub fn series(&self) -> impl Iterator<Item = &CsvSeries> {
+        self.pipeline.stages.iter().filter_map(|s| s.series())
+    }
+
+    /// A progress bar (drawn only with `show`) over the stretch from here to where stepping
+    /// stops: the run's end, or the time `until` (s) or `steps` more steps if they come first.
+    pub fn progress(&self, show: bool, until: Option<Real>, steps: Option<u64>) -> Progress {
+        let sim = &self.pipeline.sim;
+        let start = (sim.time(), sim.steps());
+        let end_time = self.end.time.into_iter().chain(until).reduce(Real::min);
+        let end_step = self.end.steps.into_iter().chain(steps.map(|n| start.1 + n));
+        Progress::new(show, start, (end_time, end_step.min()))
     }
 
     /// Writes what a run writes at its end (the line probes, the time-averaged velocity) and
@@ -373,46 +387,79 @@ fn stopped(e: StepError, frames: usize, out: &Path) -> RunError {
     }
 }
 
-fn progress_bar(show: bool, end: &End) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = match (end.time, end.steps) {
-        (Some(_), _) => ProgressBar::new(1000),
-        (None, Some(n)) => ProgressBar::new(n),
-        (None, None) => ProgressBar::no_length(),
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar
+/// A run's progress bar, as `eddy run` and `Simulation.run(progress=True)` show it: the share
+/// done of a stretch of simulated time or of steps (whichever is further along, as the first
+/// to reach its end stops the run), elapsed time, ETA and the step's figures.
+pub struct Progress {
+    bar: ProgressBar,
+    /// Simulated time (s) and steps at the stretch's start.
+    start: (Real, u64),
+    /// Where it ends, in time and in steps, if bounded.
+    end: (Option<Real>, Option<u64>),
 }
 
-fn update_bar(bar: &ProgressBar, end: &End, p: &Pipeline, rec: &StepRecord) {
-    let sim = &p.sim;
-    match end.time {
-        Some(t) => bar.set_position((sim.time() / t * 1000.0).min(1000.0) as u64),
-        None => bar.set_position(sim.steps()),
-    }
-    let elapsed = bar.elapsed().as_secs_f64().max(1e-9);
-    let mut msg = format!(
-        "t = {:.4} s, step {}, dt = {:.2e} s, {:.1} steps/s",
-        sim.time(),
-        sim.steps(),
-        rec.dt,
-        sim.steps() as f64 / elapsed
-    );
-    if let Some(g) = rec.grid {
-        msg += &format!(
-            ", {} CG iterations, change {:.1e}/s",
-            g.pressure_iterations, g.change_rate
+/// Positions along a bounded bar: the share done in thousandths.
+const BAR_LENGTH: u64 = 1000;
+
+impl Progress {
+    fn new(show: bool, start: (Real, u64), end: (Option<Real>, Option<u64>)) -> Self {
+        let bar = match (show, end.0.is_some() || end.1.is_some()) {
+            (false, _) => ProgressBar::hidden(),
+            (true, true) => ProgressBar::new(BAR_LENGTH),
+            (true, false) => ProgressBar::no_length(),
+        };
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
+        Self { bar, start, end }
     }
-    if let Some(lost) = rec.sph.map(|s| s.lost).filter(|&n| n > 0) {
-        msg += &format!(", {lost} fluid particles lost");
+
+    /// Shows where `run` is after the step `rec`.
+    pub fn update(&self, run: &Run, rec: &StepRecord) {
+        let sim = &run.pipeline.sim;
+        let (time, steps) = (sim.time(), sim.steps());
+        let share = |now: Real, from: Real, to: Real| {
+            if to > from {
+                ((now - from) / (to - from)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        };
+        let taken = steps - self.start.1;
+        let by_time = self.end.0.map(|to| share(time, self.start.0, to));
+        let by_steps = self
+            .end
+            .1
+            .map(|to| share(steps as Real, self.start.1 as Real, to as Real));
+        match by_time.into_iter().chain(by_steps).reduce(Real::max) {
+            Some(done) => self
+                .bar
+                .set_position((done * BAR_LENGTH as Real).round() as u64),
+            None => self.bar.set_position(taken),
+        }
+        let elapsed = self.bar.elapsed().as_secs_f64().max(1e-9);
+        let mut msg = format!(
+            "t = {time:.4} s, step {steps}, dt = {:.2e} s, {:.1} steps/s",
+            rec.dt,
+            taken as f64 / elapsed
+        );
+        if let Some(g) = rec.grid {
+            msg += &format!(
+                ", {} CG iterations, change {:.1e}/s",
+                g.pressure_iterations, g.change_rate
+            );
+        }
+        if let Some(lost) = rec.sph.map(|s| s.lost).filter(|&n| n > 0) {
+            msg += &format!(", {lost} fluid particles lost");
+        }
+        self.bar.set_message(msg);
     }
-    bar.set_message(msg);
+
+    /// Clears the bar from the terminal.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
 }

@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 pub use build::{grid_solver, sph_solver, Pipeline};
 pub use checkpoint::{CheckpointError, INTERRUPTED_EXIT};
 pub use coupling::{Exchange, DRAG_HEIGHT};
-pub use driver::{run_scene, Run};
+pub use driver::{run_scene, Progress, Run};
 pub use footprint::{available_memory, Footprint};
 pub use order::SceneKind;
 pub use outputs::{Kind, Output, OutputSpec, Outputs};

@@ -28,7 +28,7 @@ pub struct Params {
     #[serde(default = "default_epsilon")]
     pub epsilon: Real,
     /// The wall samples take part in the method's difference operators. It models no-slip
-    /// walls: pair it with `viscosity.boundary > 0` (`crate::refine::params` says why it is off).
+    /// walls: pair it with `viscosity.boundary > 0` (the book's SPH refinements chapter says why it is off).
     #[serde(default)]
     pub walls: bool,
 }

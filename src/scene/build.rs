@@ -89,7 +89,7 @@ pub fn grid_params(scene: &Scene) -> Option<GridParams> {
             .map(|t| InflowModes::new(t, scene.seed)),
         advection: grid.advection,
         reflection: grid.reflection,
-        obstacle_surface: grid.obstacle_surface,
+        obstacle_surface: grid.surface(scene.coupling.is_some()),
         incremental_pressure: grid.incremental_pressure,
         viscosity_scheme: grid.viscosity_scheme,
         viscosity: scene.viscosity.kinematic,

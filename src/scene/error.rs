@@ -8,11 +8,11 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file could not be read.
-    #[error("{}: could not read the scene file: {source}", file.display())]
+    #[error("{}: could not read the scene file: {cause}", file.display())]
     Io {
         file: PathBuf,
-        #[source]
-        source: std::io::Error,
+        /// Said in the message, not chained as a source: a printed chain would say it twice.
+        cause: std::io::Error,
     },
 
     /// The file is not valid TOML. Line and column are 1-based.
@@ -27,21 +27,33 @@ pub enum SceneError {
     /// Valid TOML that does not fit the schema: an unknown key, a missing key or a wrong type.
     /// `key` is the dotted path of where it happened (empty for the top level); `location` is the
     /// 1-based (line, column) in the file, absent when `--set` overrides rewrote the document.
-    #[error("{}{}: {}: {message}", file.display(), Location(location), KeyPath(key))]
+    /// `set_by` is the override that wrote the key, when one did (and the error is told against
+    /// it, the file only said for context).
+    #[error(
+        "{}{}: {}: {message}",
+        Origin(file, set_by),
+        Location(location),
+        KeyPath(key)
+    )]
     Schema {
         file: PathBuf,
         key: String,
-        location: Option<(usize, usize)>,
+        location: Option<(u32, u32)>,
         message: String,
+        set_by: Option<Box<str>>,
     },
 
     /// A value outside its allowed range, or inconsistent with another one.
-    #[error("{}: invalid `{key}` = {value}; allowed: {allowed}", file.display())]
+    #[error(
+        "{}: invalid `{key}` = {value}; allowed: {allowed}",
+        Origin(file, set_by)
+    )]
     Invalid {
         file: PathBuf,
         key: String,
         value: String,
         allowed: String,
+        set_by: Option<Box<str>>,
     },
 
     /// A malformed `--set dotted.key=value` argument.
@@ -49,16 +61,29 @@ pub enum SceneError {
     Override { arg: String, reason: String },
 
     /// A mesh shape whose file does not exist (`path` is as resolved against the scene folder).
-    #[error("{}: `{key}`: mesh file {} does not exist", file.display(), path.display())]
+    #[error("{}: `{key}`: mesh file {} does not exist", Origin(file, set_by), path.display())]
     MissingMesh {
         file: PathBuf,
         key: String,
         path: PathBuf,
+        set_by: Option<Box<str>>,
     },
 }
 
+/// Where an error is: the scene file, or the `--set` override that wrote the key, on that file.
+struct Origin<'a>(&'a PathBuf, &'a Option<Box<str>>);
+
+impl fmt::Display for Origin<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.1 {
+            Some(arg) => write!(f, "--set {arg:?} on {}", self.0.display()),
+            None => write!(f, "{}", self.0.display()),
+        }
+    }
+}
+
 /// Formats an optional (line, column) as `: line L, column C`.
-struct Location<'a>(&'a Option<(usize, usize)>);
+struct Location<'a>(&'a Option<(u32, u32)>);
 
 impl fmt::Display for Location<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -39,22 +39,24 @@ pub struct Grid {
     /// What lies beyond each side of the domain (all no-slip walls by default).
     #[serde(default)]
     pub boundary: GridBoundary,
-    /// How the obstacles meet the cells: `staircase` (default: each cell solid or fluid by its
-    /// centre) or `cut` (the projection weighs each face by its open fraction, the no-slip wall
-    /// sits on the true surface; the DFG scenes use it).
-    #[serde(default)]
-    pub obstacle_surface: ObstacleSurface,
+    /// How the obstacles meet the cells: `cut` (the projection weighs each face by its open
+    /// fraction, the no-slip wall sits on the true surface) or `staircase` (each cell solid or
+    /// fluid by its centre, first order; slightly cheaper). Default: `cut`, and `staircase` in
+    /// coupled scenes, where cut cells are refused: an obstacle's partly open cells under the
+    /// water close off pockets of the air's pressure system that the projection cannot solve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obstacle_surface: Option<ObstacleSurface>,
     /// Carry the last step's pressure gradient into the momentum and project its increment
     /// only (default true; Goda 1979): the splitting error beside no-slip walls becomes second
     /// order in dt. Off under `reflection` and in coupled scenes, which project the whole
     /// pressure.
     #[serde(default = "super::schema::default_true")]
     pub incremental_pressure: bool,
-    /// Synthetic turbulence on the inflow sides (`intensity`, `length`, `modes`; see
-    /// [`InflowTurbulence`]): random Fourier modes carried in at the inflow velocity, drawn
-    /// from the scene's seed. None when left out. The normal velocity of each inflow face not
-    /// under an obstacle is the side's own plus `intensity` |v| f, f = sqrt(2/N) sum
-    /// cos(k.(x - v t) + phi) over the N modes, directions uniform.
+    /// Synthetic turbulence on the inflow sides (`intensity`, `length`, `modes`): random
+    /// Fourier modes carried in at the inflow velocity, drawn from the scene's seed. None when
+    /// left out. The normal velocity of each inflow face not under an obstacle is the side's own
+    /// plus `intensity` |v| f, f = sqrt(2/N) sum cos(k.(x - v t) + phi) over the N modes,
+    /// directions uniform.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inflow_turbulence: Option<InflowTurbulence>,
     /// Fluid density, kg/m^3; scales pressures and forces only (default 1).
@@ -193,6 +195,13 @@ impl Scene {
         let Some(grid) = &self.grid else {
             return Ok(());
         };
+        if self.coupling.is_some() && grid.obstacle_surface == Some(ObstacleSurface::Cut) {
+            return Err(c.invalid(
+                "grid.obstacle_surface",
+                "\"cut\"",
+                "\"staircase\" in a coupled scene (cut cells do not meet the water yet)",
+            ));
+        }
         if grid.static_flow_frame.is_some() && grid.static_flow.is_none() {
             return Err(c.invalid(
                 "grid.static_flow_frame",
@@ -242,11 +251,7 @@ impl Scene {
                 return Err(c.invalid(
                     format!("grid.resolution[{axis}]"),
                     cells,
-                    format!(
-                        "{} for cubic cells of {dx} m (domain extent {} m along this axis)",
-                        extent(axis) / dx,
-                        extent(axis)
-                    ),
+                    cubic_cells(extent(axis), dx),
                 ));
             }
         }
@@ -452,4 +457,37 @@ fn check_inflow_turbulence(
         ));
     }
     Ok(())
+}
+
+impl Grid {
+    /// The obstacle surface the scene asks for, or its default (see `obstacle_surface`).
+    pub fn surface(&self, coupled: bool) -> ObstacleSurface {
+        self.obstacle_surface.unwrap_or(if coupled {
+            ObstacleSurface::Staircase
+        } else {
+            ObstacleSurface::Cut
+        })
+    }
+}
+
+/// What a resolution along an axis must be for cells of side `dx` (the first axis's) over
+/// `extent`: the whole number of cells that fits, or, when not even one does, the extent to
+/// change.
+fn cubic_cells(extent: Real, dx: Real) -> String {
+    let cells = (extent / dx).round();
+    if cells >= 1.0 {
+        format!(
+            "{} for cubic cells of {} m (domain extent {} m along this axis)",
+            Number(cells),
+            Number(dx),
+            Number(extent)
+        )
+    } else {
+        format!(
+            "cubic cells: the domain's {} m along this axis holds less than one cell of {} m; \
+             widen the domain or refine the first axis",
+            Number(extent),
+            Number(dx)
+        )
+    }
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use toml::de::DeValue;
 use toml::{Spanned, Table, Value};
 
-use super::overrides::apply_override;
+use super::overrides::{apply_override, blame_override};
 use super::{Body, Scene, SceneError, Shape};
 
 /// Reads, overrides, checks and validates the scene file at `path`.
@@ -14,9 +14,9 @@ use super::{Body, Scene, SceneError, Shape};
 /// `overrides` are `dotted.key=value` assignments as given to `eddy run --set`, applied in order.
 /// Relative mesh paths come back absolute, resolved against the scene file's folder.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|cause| SceneError::Io {
         file: path.to_owned(),
-        source,
+        cause,
     })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
@@ -49,11 +49,13 @@ pub fn parse_str(text: &str, origin: &Path, overrides: &[String]) -> Result<Scen
             reason: format!("the overridden scene cannot be written as TOML: {e}"),
         })?;
         // Line numbers in the rendered text would mean nothing to the user: keep only the key.
-        deserialize(&rendered, origin, false)?
+        deserialize(&rendered, origin, false).map_err(|e| blame_override(e, overrides))?
     };
-    check_array_lengths(&table, &scene, origin)?;
+    check_array_lengths(&table, &scene, origin).map_err(|e| blame_override(e, overrides))?;
     resolve_paths(&mut scene, origin);
-    scene.validate(origin)?;
+    scene
+        .validate(origin)
+        .map_err(|e| blame_override(e, overrides))?;
     Ok(scene)
 }
 
@@ -74,6 +76,7 @@ fn check_array_lengths(document: &Table, scene: &Scene, file: &Path) -> Result<(
             key,
             value: format!("{given} values"),
             allowed: format!("exactly {kept}"),
+            set_by: None,
         }),
     }
 }
@@ -166,8 +169,15 @@ fn deserialize(text: &str, file: &Path, located: bool) -> Result<Scene, SceneErr
         SceneError::Schema {
             file: file.to_owned(),
             key,
-            location: offset.filter(|_| located).map(|o| line_col(text, o)),
+            // u32 keeps the error small (it travels inside every run error); a file of four
+            // billion lines would be refused long before.
+            location: offset.filter(|_| located).map(|o| {
+                let (line, column) = line_col(text, o);
+                let narrow = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+                (narrow(line), narrow(column))
+            }),
             message,
+            set_by: None,
         }
     })
 }

@@ -41,6 +41,33 @@ pub fn apply_override(root: &mut Table, assignment: &str) -> Result<(), SceneErr
     result.map_err(fail)
 }
 
+/// Tells an error about a key that an override wrote against that override (`--set
+/// "time.ennd=3" on scene.toml: ...`): the file does not hold the key. Errors about keys no
+/// override wrote (the key itself or a table holding it) are returned as they are. Of several
+/// overrides of a key, the last (the one that stands) is named.
+pub fn blame_override(mut error: SceneError, overrides: &[String]) -> SceneError {
+    let (key, set_by) = match &mut error {
+        SceneError::Schema { key, set_by, .. }
+        | SceneError::Invalid { key, set_by, .. }
+        | SceneError::MissingMesh { key, set_by, .. } => (key, set_by),
+        _ => return error,
+    };
+    // `obstacles[0].abl` in messages is `obstacles.0.abl` in an override.
+    let dotted = key.replace('[', ".").replace(']', "");
+    let within = |outer: &str| {
+        dotted == outer
+            || dotted
+                .strip_prefix(outer)
+                .is_some_and(|r| r.starts_with('.'))
+    };
+    *set_by = overrides
+        .iter()
+        .rev()
+        .find(|arg| arg.split_once('=').is_some_and(|(k, _)| within(k.trim())))
+        .map(|arg| arg.as_str().into());
+    error
+}
+
 /// Reads the right-hand side of an assignment.
 fn parse_value(raw: &str) -> Result<Value, String> {
     let text = raw.trim();

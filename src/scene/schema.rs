@@ -247,10 +247,13 @@ pub struct Output {
     /// time, whether or not frames are written, so the output formats do not change the run.
     #[serde(default = "default_interval")]
     pub interval: Real,
-    /// Write one VTK file per frame plus a `particles.pvd` series for ParaView.
+    /// Write one VTK file per frame plus a `.pvd` series for ParaView (`particles.pvd`,
+    /// `grid.pvd`).
     #[serde(default = "default_true")]
     pub vtk: bool,
-    /// Write the frames into one `frames.h5` as well.
+    /// Write the frames as HDF5 as well: each frame its own file `frames_NNNNNN.h5`, the index
+    /// `frames.h5` linking the complete ones, and `frames.xmf` beside it for ParaView
+    /// (`grid_frames.*` and `particles_frames.*` in a scene with both media).
     #[serde(default)]
     pub hdf5: bool,
     /// Compression level of the frames, 0 to 9 (0: uncompressed). HDF5 datasets are chunked

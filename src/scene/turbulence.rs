@@ -61,8 +61,7 @@ impl Scene {
                 return Err(c.invalid(
                     format!("obstacles[{i}].abl.database"),
                     abl.database.display(),
-                    "an existing database file (eddy-precompute OBSTACLE.toml --out FILE \
-                     writes one)",
+                    how_to_precompute(&abl.database, b.name.as_deref()),
                 ));
             }
         }
@@ -144,4 +143,27 @@ fn obstacle_speed(body: &Body, index: usize) -> Real {
 
 fn norm(v: [Real; 3]) -> Real {
     v.iter().map(|x| x * x).sum::<Real>().sqrt()
+}
+
+/// What a missing database's error asks for: the command that writes it, naming the obstacle
+/// file beside it (`db/sphere.toml` for `db/sphere.h5`, as the shipped scenes keep them) when
+/// there is one, and otherwise the file to write first.
+fn how_to_precompute(database: &std::path::Path, obstacle: Option<&str>) -> String {
+    let spec = database.with_extension("toml");
+    if spec.is_file() {
+        format!(
+            "an existing database file; write this one with `eddy-precompute {} --out {}`",
+            spec.display(),
+            database.display()
+        )
+    } else {
+        format!(
+            "an existing database file; describe the obstacle{} (its shape as in this scene) in \
+             an obstacle file such as {} and run `eddy-precompute {} --out {}`",
+            obstacle.map(|n| format!(" `{n}`")).unwrap_or_default(),
+            spec.display(),
+            spec.display(),
+            database.display()
+        )
+    }
 }

@@ -419,6 +419,7 @@ impl Checker<'_> {
             key: key.into(),
             value: value.to_string(),
             allowed: allowed.into(),
+            set_by: None,
         }
     }
 
@@ -533,6 +534,7 @@ impl Checker<'_> {
                     file: self.file.to_owned(),
                     key: format!("{key}.path"),
                     path: resolved,
+                    set_by: None,
                 });
             }
         }

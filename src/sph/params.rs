@@ -234,7 +234,7 @@ pub struct Pressure {
     #[serde(default)]
     pub second_order: bool,
     /// DFSPH: let the pressure go negative, so the fluid can pull as well as push, and solve
-    /// both systems by conjugate gradients (`super::cg`). For fluids that fill their walls
+    /// both systems by conjugate gradients. For fluids that fill their walls
     /// (channels, wakes): the clamped default lets a wake cavitate. There is no free-surface
     /// rule, so a free surface would pull itself together; outflows are held at `ambient`.
     #[serde(default)]

@@ -385,31 +385,13 @@ pub(crate) fn write_figure<F: Figure>(
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_else(|| "png".into());
     let tmp: PathBuf = out.with_file_name(format!(".{name}.tmp.{ext}"));
-    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
-    fn on<DB: DrawingBackend, F: Figure>(
-        root: Canvas<DB>,
-        figure: F,
-        out: &Path,
-        fail: impl Fn(&dyn std::fmt::Display) -> IoError,
-    ) -> Result<F::Output, IoError> {
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let result = figure.draw(&root, out)?;
-        root.present().map_err(|e| fail(&e))?;
-        Ok(result)
-    }
     let result = if ext == "svg" {
-        on(
-            SVGBackend::new(&tmp, size).into_drawing_area(),
-            figure,
-            out,
-            fail,
-        )
+        draw_on(SVGBackend::new(&tmp, size).into_drawing_area(), figure, out)
     } else {
-        on(
+        draw_on(
             BitMapBackend::new(&tmp, size).into_drawing_area(),
             figure,
             out,
-            fail,
         )
     };
     if result.is_err() {
@@ -418,6 +400,36 @@ pub(crate) fn write_figure<F: Figure>(
     let result = result?;
     std::fs::rename(&tmp, out).map_err(|e| IoError::io(out, "renaming the finished plot to", e))?;
     Ok(result)
+}
+
+/// Draws `figure` on white into `root` and presents it; `out` names the figure in errors.
+fn draw_on<DB: DrawingBackend, F: Figure>(
+    root: Canvas<DB>,
+    figure: F,
+    out: &Path,
+) -> Result<F::Output, IoError> {
+    let fail = |e: &dyn std::fmt::Display| IoError::invalid(out, format!("plotting: {e}"));
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let result = figure.draw(&root, out)?;
+    root.present().map_err(|e| fail(&e))?;
+    Ok(result)
+}
+
+/// Draws `figure` as [`write_figure`] draws a bitmap, into memory: RGB bytes, row by row, of
+/// `size` pixels (an animation's frame; `out` names it in errors).
+pub(crate) fn draw_pixels<F: Figure>(
+    out: &Path,
+    size: (u32, u32),
+    figure: F,
+) -> Result<(Vec<u8>, F::Output), IoError> {
+    register_bundled_font();
+    let mut pixels = vec![0; 3 * size.0 as usize * size.1 as usize];
+    let result = draw_on(
+        BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area(),
+        figure,
+        out,
+    )?;
+    Ok((pixels, result))
 }
 
 /// One run of a run-time-against-error study: its label, wall seconds and errors (one per

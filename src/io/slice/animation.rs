@@ -1,7 +1,7 @@
-//! The animated GIF of `eddy slice`: its frames drawn as the PNGs are (through the figure
-//! writer all eddy figures use, with its bundled font), read back and encoded by the `gif`
-//! crate in one palette fixed for the whole animation, so a value has the same colour in every
-//! frame. Written under a temporary name and renamed when complete.
+//! The animated GIF of `eddy slice`: its frames drawn as the PNGs are (by the figure drawing
+//! all eddy figures use, with its bundled font), into memory, and encoded by the `gif` crate in
+//! one palette fixed for the whole animation, so a value has the same colour in every frame.
+//! Written under a temporary name and renamed when complete.
 
 use std::collections::HashMap;
 use std::fs::File;
@@ -9,12 +9,11 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use gif::{Encoder, Repeat};
-use image::RgbImage;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 
 use crate::io::atomic::temp_sibling;
-use crate::io::plot::{write_figure, Figure};
+use crate::io::plot::{draw_pixels, Figure};
 use crate::io::IoError;
 use crate::Real;
 
@@ -27,9 +26,8 @@ const GREYS: usize = 55;
 /// An animated GIF being written.
 pub(super) struct Animation {
     out: PathBuf,
-    /// The GIF's temporary name, and the temporary PNG each frame is drawn into.
+    /// The GIF's temporary name.
     tmp: PathBuf,
-    frame: PathBuf,
     encoder: Option<Encoder<BufWriter<File>>>,
     size: (u32, u32),
     palette: Vec<[u8; 3]>,
@@ -55,7 +53,6 @@ impl Animation {
     /// Starts `out`, of frames of `size` pixels, looping forever.
     pub(super) fn create(out: &Path, size: (u32, u32), outline: RGBColor) -> Result<Self, IoError> {
         let tmp = temp_sibling(out)?;
-        let frame = tmp.with_extension("frame.png");
         let (Ok(w), Ok(h)) = (u16::try_from(size.0), u16::try_from(size.1)) else {
             return Err(IoError::invalid(
                 out,
@@ -68,7 +65,6 @@ impl Animation {
         let mut animation = Animation {
             out: out.to_path_buf(),
             tmp,
-            frame,
             encoder: None,
             size,
             palette,
@@ -87,22 +83,12 @@ impl Animation {
 
     /// Draws `figure` as the next frame and returns what it returns.
     pub(super) fn push<F: Figure>(&mut self, figure: F) -> Result<F::Output, IoError> {
-        let output = write_figure(&self.frame, self.size, figure)?;
-        let image = image::open(&self.frame)
-            .map_err(|e| self.fail(format!("reading the drawn frame back: {e}")))?
-            .to_rgb8();
-        if image.dimensions() != self.size {
-            return Err(self.fail(format!(
-                "a frame of {:?} pixels in an animation of {:?}",
-                image.dimensions(),
-                self.size
-            )));
-        }
+        let (pixels, output) = draw_pixels(&self.out, self.size, figure)?;
         let frame = gif::Frame {
-            width: image.width() as u16,
-            height: image.height() as u16,
+            width: self.size.0 as u16,
+            height: self.size.1 as u16,
             delay: DELAY,
-            buffer: self.indices(&image).into(),
+            buffer: self.indices(&pixels).into(),
             ..gif::Frame::default()
         };
         let written = match self.encoder.as_mut() {
@@ -113,16 +99,14 @@ impl Animation {
         Ok(output)
     }
 
-    /// The palette index of each pixel: the nearest colour of the palette.
-    fn indices(&mut self, image: &RgbImage) -> Vec<u8> {
+    /// The palette index of each pixel (RGB bytes): the nearest colour of the palette.
+    fn indices(&mut self, pixels: &[u8]) -> Vec<u8> {
         let palette = &self.palette;
-        image
-            .pixels()
+        pixels
+            .chunks_exact(3)
             .map(|p| {
-                *self
-                    .index
-                    .entry(p.0)
-                    .or_insert_with(|| nearest(palette, p.0))
+                let c = [p[0], p[1], p[2]];
+                *self.index.entry(c).or_insert_with(|| nearest(palette, c))
             })
             .collect()
     }
@@ -142,11 +126,10 @@ impl Animation {
     }
 }
 
-/// Removes the frame's PNG, and the GIF's temporary file unless it was renamed.
+/// Removes the GIF's temporary file unless it was renamed.
 impl Drop for Animation {
     fn drop(&mut self) {
         drop(self.encoder.take());
-        let _ = std::fs::remove_file(&self.frame);
         let _ = std::fs::remove_file(&self.tmp);
     }
 }

@@ -10,9 +10,11 @@
 //!   own parameter struct; [`refine`]: the SPH turbulence refinements, attached as step hooks.
 //! - [`vortex`]: the vortex-particle layer, which reads and writes solvers through two traits;
 //!   [`abl`]: the artificial-boundary-layer database and lookup.
+//! - [`study`]: parameter studies (`eddy sweep`), each point a run of its own.
 //! - [`geometry`] (bodies and motion), [`spatial`] (the hashed cell grid), [`stepping`] (step
 //!   limits), [`parallel`] (fixed-order sums), [`simd`] (vector kernels dispatched to the
-//!   CPU's widest instruction set): shared by the parts above.
+//!   CPU's widest instruction set), [`interval`] (the allowed range of a number): shared by
+//!   the parts above.
 //! - [`metrics`] (diagnostics and probes), [`io`] (VTK, HDF5, CSV, plots), [`bench`] (the
 //!   benchmark tables behind `eddy bench` and `eddy bench-grid`).
 
@@ -20,6 +22,7 @@ pub mod abl;
 pub mod bench;
 pub mod geometry;
 pub mod grid;
+pub mod interval;
 pub mod io;
 pub mod metrics;
 pub mod parallel;
@@ -31,6 +34,7 @@ pub mod spatial;
 pub mod sph;
 pub mod state;
 pub mod stepping;
+pub mod study;
 pub mod vortex;
 
 /// The one floating-point type of eddy (f64 throughout, see ARCHITECTURE.md, "Conventions").

@@ -204,7 +204,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             let result = run_one(scene, options, plan);
             if let Some(path) = status {
                 let (how, cause) = match &result {
-                    Ok(()) => (cli::sweep::Status::Finished, String::new()),
+                    Ok(()) => (eddy::study::Status::Finished, String::new()),
                     Err(e) => {
                         let unstable = e.chain().any(|c| {
                             matches!(
@@ -213,14 +213,14 @@ fn run(command: Command) -> anyhow::Result<()> {
                             )
                         });
                         let how = if unstable {
-                            cli::sweep::Status::Unstable
+                            eddy::study::Status::Unstable
                         } else {
-                            cli::sweep::Status::Failed
+                            eddy::study::Status::Failed
                         };
                         (how, format!("{e:#}"))
                     }
                 };
-                cli::sweep::write_status(&path, how, &cause)?;
+                eddy::study::write_status(&path, how, &cause)?;
             }
             result?;
         }

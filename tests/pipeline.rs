@@ -1,7 +1,7 @@
 //! The one pipeline: the plan is what runs, a scene with a grid and an SPH fluid steps both on
 //! one clock, and the layering rules of ARCHITECTURE.md hold in the source tree.
 
-use eddy::pipeline::{run, Pipeline, RunOptions};
+use eddy::pipeline::{run, Pipeline, Plan, RunOptions};
 use eddy::scene;
 use std::path::{Path, PathBuf};
 use tempfile::TempDir;
@@ -12,9 +12,9 @@ fn shipped(file: &str) -> PathBuf {
         .join(file)
 }
 
-/// Runs `file` for `steps` steps with a stage trace; returns the trace, the plan's trace of one
-/// step, and the output folder.
-fn traced(file: &str, overrides: &[&str], steps: u64) -> (Vec<String>, Vec<String>, TempDir) {
+/// Runs `file` for `steps` steps with a stage trace; returns the trace, the plan, and the output
+/// folder.
+fn traced(file: &str, overrides: &[&str], steps: u64) -> (Vec<String>, Plan, TempDir) {
     let out = tempfile::tempdir().expect("temp dir");
     let mut overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     overrides.push("output.vtk=false".into());
@@ -27,54 +27,203 @@ fn traced(file: &str, overrides: &[&str], steps: u64) -> (Vec<String>, Vec<Strin
     };
     let summary = run(&shipped(file), &options).expect("the scene runs");
     assert_eq!(summary.steps, steps, "{file} stopped early");
-    (summary.trace, summary.plan.step_trace(), out)
+    (summary.trace, summary.plan, out)
 }
 
-/// Every step runs exactly the stages and parts the plan lists, in its order, for a grid
-/// scene, SPH scenes with and without a refinement and with parts switched off, a scene with
-/// both solvers, and a coupled one.
+/// A scene of [`the_plan_is_what_runs`]: the scene, its overrides, the entries of a step's
+/// trace (`stage` or `stage/part`) the plan must list for the case to exercise what it is
+/// there for, and phrases the plan must say (a part's way of running that has no part of its
+/// own, such as advection–reflection inside `grid/advect`).
+struct Case {
+    file: &'static str,
+    overrides: &'static [&'static str],
+    lists: &'static [&'static str],
+    says: &'static [&'static str],
+}
+
+const fn case(
+    file: &'static str,
+    overrides: &'static [&'static str],
+    lists: &'static [&'static str],
+) -> Case {
+    Case {
+        file,
+        overrides,
+        lists,
+        says: &[],
+    }
+}
+
+/// The cylinder channel at 64 x 16 x 1 cells (the one-cell span follows the cells, which are
+/// cubic).
+const SMALL_CHANNEL: [&str; 2] = ["grid.resolution=[64,16,1]", "domain.max=[4.0,1.0,0.0625]"];
+
+/// Every step runs exactly the stages and parts the plan lists, in its order: the trace of four
+/// steps is the plan's step trace four times. The scenes cover a grid scene, SPH scenes with
+/// and without a refinement and with parts switched off, a scene with both solvers side by
+/// side, coupled ones, and each part that runs only when a scene asks for it, which the plan
+/// must then list: advection–reflection (said in `grid/advect`, with its viscosity and
+/// pressure), inflow turbulence (`grid/inflow`), the grid's running average (`grid/average`),
+/// the statistics stage on the grid and on the particles (`statistics/grid`,
+/// `statistics/particles`, sampling every step), moving obstacles re-voxelised on the grid
+/// (`grid/obstacles`, in a grid scene and in a coupled one), and SPH open boundaries
+/// (`sph/open boundaries`, with a refinement whose per-particle state follows the particles in
+/// and out).
 #[test]
 fn the_plan_is_what_runs() {
-    let cases: [(&str, &[&str]); 8] = [
-        ("lid_driven_cavity.toml", &[]),
-        ("smoke_plume.toml", &["grid.resolution=[16,16,16]"]),
-        ("dam_break.toml", &[]),
-        (
+    let cases = [
+        case("lid_driven_cavity.toml", &[], &["grid/pressure"]),
+        case(
+            "smoke_plume.toml",
+            &["grid.resolution=[16,16,16]"],
+            &["grid/forces"],
+        ),
+        case("dam_break.toml", &[], &["sph/divergence", "metrics"]),
+        case(
             "dam_break.toml",
             &["pressure.divergence_solver=false", "output.metrics=[]"],
+            &["sph/pressure"],
         ),
-        ("refine_dam_break.toml", &["refinement.method=\"vrsph\""]),
-        (
+        case(
+            "refine_dam_break.toml",
+            &["refinement.method=\"vrsph\""],
+            &["sph/refine"],
+        ),
+        case(
             "refine_stirring_rod.toml",
             &["refinement.method=\"mcvsph\""],
+            &["sph/refine"],
         ),
-        ("coupled_tank_and_plume.toml", &[]),
-        ("coupled_wind_over_tank.toml", &["fluid.spacing=0.025"]),
+        case("coupled_tank_and_plume.toml", &[], &["sph", "grid"]),
+        case(
+            "coupled_wind_over_tank.toml",
+            &["fluid.spacing=0.025"],
+            &["coupling", "surface pressure"],
+        ),
+        Case {
+            says: &["advection-reflection (two projections)"],
+            ..case(
+                "taylor_green.toml",
+                &[],
+                &["grid/advect", "grid/viscosity", "grid/pressure"],
+            )
+        },
+        case(
+            "cylinder_channel.toml",
+            &[
+                SMALL_CHANNEL[0],
+                SMALL_CHANNEL[1],
+                "grid.inflow_turbulence={ intensity = 0.05, length = 0.25 }",
+            ],
+            &["grid/inflow", "probes"],
+        ),
+        case(
+            "cylinder_channel.toml",
+            &[
+                SMALL_CHANNEL[0],
+                SMALL_CHANNEL[1],
+                "grid.average_from=0.0",
+                "statistics.from=0.0",
+            ],
+            &["grid/average", "statistics", "statistics/grid"],
+        ),
+        case(
+            "coupled_tank_and_plume.toml",
+            &["statistics.from=0.0"],
+            &["statistics/grid", "statistics/particles"],
+        ),
+        case(
+            "smoke_sphere.toml",
+            &[
+                "grid.resolution=[16,16,16]",
+                "obstacles.0.motion={ linear = [0.2, 0.0, 0.0] }",
+            ],
+            &["grid/obstacles"],
+        ),
+        case("coupled_hull.toml", &[], &["grid/obstacles", "coupling"]),
+        case(
+            "refine_stream_ball.toml",
+            &["refinement.method=\"micropolar\""],
+            &["sph/open boundaries", "sph/refine"],
+        ),
     ];
-    for (file, overrides) in cases {
+    for Case {
+        file,
+        overrides,
+        lists,
+        says,
+    } in cases
+    {
         let steps = 4;
-        let (trace, step, _) = traced(file, overrides, steps);
-        assert!(!step.is_empty());
+        let (trace, plan, _) = traced(file, overrides, steps);
+        let step = plan.step_trace();
+        for entry in lists {
+            assert!(
+                step.iter().any(|s| s == entry),
+                "{file} {overrides:?}: the plan does not list {entry}: {step:?}"
+            );
+        }
+        let text = plan.to_string();
+        for phrase in says {
+            assert!(
+                text.contains(phrase),
+                "{file} {overrides:?}: the plan does not say {phrase:?}:\n{text}"
+            );
+        }
         let expected: Vec<String> = (0..steps).flat_map(|_| step.clone()).collect();
         assert_eq!(trace, expected, "{file} {overrides:?}");
     }
+}
+
+/// The statistics stage samples every `statistics.every` steps, as its line in the plan says:
+/// each step runs the stage, and the steps that sample (the third and the sixth, every 3)
+/// run exactly the parts the plan lists; the others run none.
+#[test]
+fn statistics_run_their_parts_on_the_steps_they_sample() {
+    let overrides = [
+        SMALL_CHANNEL[0],
+        SMALL_CHANNEL[1],
+        "statistics.from=0.0",
+        "statistics.every=3",
+    ];
+    let steps = 6;
+    let (trace, plan, _) = traced("cylinder_channel.toml", &overrides, steps);
+    assert!(plan.to_string().contains("every 3 steps"), "{plan}");
+    let step = plan.step_trace();
+    let sampled: Vec<String> = step
+        .iter()
+        .filter(|s| s.starts_with("statistics/"))
+        .cloned()
+        .collect();
+    assert_eq!(sampled, ["statistics/grid"]);
+    let expected: Vec<String> = (0..steps)
+        .flat_map(|k| {
+            let samples = k % 3 == 2;
+            step.iter()
+                .filter(move |s| samples || !s.starts_with("statistics/"))
+                .cloned()
+        })
+        .collect();
+    assert_eq!(trace, expected);
 }
 
 /// A stage the plan leaves out does not run: without metrics no metrics file is written, and
 /// without the divergence solve no step runs it.
 #[test]
 fn a_stage_left_out_does_not_run() {
-    let (trace, step, out) = traced(
+    let (trace, plan, out) = traced(
         "dam_break.toml",
         &["pressure.divergence_solver=false", "output.metrics=[]"],
         3,
     );
+    let step = plan.step_trace();
     assert!(!step.iter().any(|s| s == "metrics" || s == "sph/divergence"));
     assert!(!trace
         .iter()
         .any(|s| s == "metrics" || s == "sph/divergence"));
     assert!(!out.path().join("metrics.csv").exists());
-    let (trace, step, out) = traced("dam_break.toml", &[], 3);
+    let (trace, plan, out) = traced("dam_break.toml", &[], 3);
+    let step = plan.step_trace();
     assert!(step.iter().any(|s| s == "sph/divergence") && step.iter().any(|s| s == "metrics"));
     assert_eq!(trace.iter().filter(|s| *s == "metrics").count(), 3);
     assert!(out.path().join("metrics.csv").exists());

@@ -5,7 +5,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use eddy::pipeline::{Pipeline, Plan};
-use eddy::refine::registry::{self, Method, MethodParams, Range};
+use eddy::refine::registry::{self, Interval, Method, MethodParams};
 use eddy::refine::{StepContext, StepHook};
 use eddy::state::{Persist, Restorer, Saver, StateError};
 use eddy::{Real, Vec3};
@@ -24,7 +24,7 @@ struct KickParams {
 }
 
 /// The dummy's one range.
-const RANGES: registry::Ranges = &[("speed", Range::open_closed(0.0, 10.0))];
+const RANGES: registry::Ranges = &[("speed", Interval::open_closed(0.0, 10.0))];
 
 impl MethodParams for KickParams {
     fn build(&self, _n: usize, _seed: u64) -> Box<dyn StepHook> {
@@ -187,7 +187,7 @@ fn every_method_file_is_in_the_table() {
 /// method registers, and every built-in method's ranges pass the same check.
 #[test]
 fn ranges_name_numeric_keys() {
-    const WRONG: registry::Ranges = &[("sped", Range::above(0.0))];
+    const WRONG: registry::Ranges = &[("sped", Interval::gt(0.0))];
     let e = registry::register(Method::new::<KickParams>("kick_typo", "a typo", WRONG))
         .expect_err("no such key");
     assert!(e.contains("`sped`"), "{e}");

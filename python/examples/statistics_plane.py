@@ -57,14 +57,22 @@ for path in args.files:
 finite = np.concatenate([p[np.isfinite(p)] for p, _, _ in planes])
 vmin, vmax = (0.0, np.percentile(finite, 99.5)) if name in ("k", "mean_enstrophy") else (
     np.percentile(finite, 0.5), np.percentile(finite, 99.5))
-fig, axes = plt.subplots(1, len(planes), figsize=(4.2 * len(planes), 3.6), squeeze=False)
-for ax, (plane, extent, at), label in zip(axes[0], planes, labels):
+# Two panels a row, each as wide as the plane is against its height.
+columns = min(2, len(planes))
+rows = -(-len(planes) // columns)
+width, height = planes[0][1][1] - planes[0][1][0], planes[0][1][3] - planes[0][1][2]
+fig, axes = plt.subplots(rows, columns, figsize=(5.0 * columns, 5.0 * rows * height / width + 1.0),
+                         squeeze=False)
+for i, (ax, (plane, extent, at), label) in enumerate(zip(axes.flat, planes, labels)):
     image = ax.imshow(plane.T, origin="lower", extent=extent, vmin=vmin, vmax=vmax,
                       cmap="viridis", interpolation="nearest")
     ax.set_title(f"{label}\n{args.field} at {args.axis} = {at:.3f} m", fontsize=9)
     ax.set_xlabel(f"{AXES[shown[0]]} (m)")
-    ax.set_ylabel(f"{AXES[shown[1]]} (m)")
+    if i % columns == 0:
+        ax.set_ylabel(f"{AXES[shown[1]]} (m)")
+for ax in list(axes.flat)[len(planes):]:
+    ax.axis("off")
 units = {"k": "m²/s²", "mean_enstrophy": "1/s²", "mean_velocity": "m/s", "mean_vorticity": "1/s"}
-fig.colorbar(image, ax=axes[0].tolist(), shrink=0.85, label=f"{args.field} ({units.get(name, '')})")
+fig.colorbar(image, ax=axes.ravel().tolist(), shrink=0.85, label=f"{args.field} ({units.get(name, '')})")
 fig.savefig(args.figure, dpi=130, bbox_inches="tight")
 print(args.figure)

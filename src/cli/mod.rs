@@ -2,7 +2,6 @@
 //! library.
 
 pub mod abl;
-pub mod analytic;
 pub mod bench;
 pub mod slice;
 pub mod spectrum;

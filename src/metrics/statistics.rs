@@ -116,7 +116,8 @@ impl Lattice {
     pub fn cell_of(&self, x: &Vec3) -> Option<usize> {
         let mut flat = 0;
         for a in 0..3 {
-            let g = ((x[a] - self.origin[a]) / self.spacing).floor();
+            // In range the cast truncates, which is the floor (without a call to libm's).
+            let g = (x[a] - self.origin[a]) / self.spacing;
             if !(g >= 0.0 && g < self.dims[a] as Real) {
                 return None;
             }
@@ -140,6 +141,19 @@ pub struct StatisticsFields {
 
 /// One bin's sums over its particles in one sample: count, velocity, vorticity, enstrophy.
 type BinSum = [Real; 8];
+
+/// Particles a thread bins at a time.
+const BIN_CHUNK: usize = 4096;
+
+/// Adds one particle of velocity `v` and vorticity `w` to a bin's sums.
+fn add_particle(sum: &mut BinSum, v: &Vec3, w: &Vec3) {
+    sum[0] += 1.0;
+    for c in 0..3 {
+        sum[1 + c] += v[c];
+        sum[4 + c] += w[c];
+    }
+    sum[7] += 0.5 * w.norm_squared();
+}
 
 /// The running statistics of one medium on its lattice.
 #[derive(Debug, Clone)]
@@ -261,20 +275,40 @@ impl FlowStatistics {
         if self.bins.len() != self.cells.len() {
             self.bins = vec![[0.0; 8]; self.cells.len()];
         }
-        for ((x, v), w) in x.iter().zip(v).zip(omega) {
-            let Some(b) = self.lattice.cell_of(x) else {
-                continue;
-            };
+        // Each chunk of particles sums its runs of particles in one bin in parallel (the
+        // solver keeps them in z-order, so a bin's particles mostly sit together); the runs
+        // then enter their bins in particle order.
+        let lattice = &self.lattice;
+        let runs: Vec<Vec<(usize, BinSum)>> = x
+            .par_chunks(BIN_CHUNK)
+            .zip(v.par_chunks(BIN_CHUNK))
+            .zip(omega.par_chunks(BIN_CHUNK))
+            .map(|((x, v), omega)| {
+                let mut runs: Vec<(usize, BinSum)> = Vec::new();
+                for ((x, v), w) in x.iter().zip(v).zip(omega) {
+                    let Some(b) = lattice.cell_of(x) else {
+                        continue;
+                    };
+                    match runs.last_mut() {
+                        Some((last, sum)) if *last == b => add_particle(sum, v, w),
+                        _ => {
+                            let mut sum = [0.0; 8];
+                            add_particle(&mut sum, v, w);
+                            runs.push((b, sum));
+                        }
+                    }
+                }
+                runs
+            })
+            .collect();
+        for (b, run) in runs.into_iter().flatten() {
             let sum = &mut self.bins[b];
             if sum[0] == 0.0 {
                 self.touched.push(b);
             }
-            sum[0] += 1.0;
-            for c in 0..3 {
-                sum[1 + c] += v[c];
-                sum[4 + c] += w[c];
+            for (s, r) in sum.iter_mut().zip(run) {
+                *s += r;
             }
-            sum[7] += 0.5 * w.norm_squared();
         }
         for &b in &self.touched {
             let sum = std::mem::take(&mut self.bins[b]);

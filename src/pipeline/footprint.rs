@@ -10,8 +10,12 @@ use crate::scene::{build, Scene};
 use crate::Real;
 
 /// Bytes per fluid particle: state, neighbour lists and the pair cache of ~50 neighbours
-/// (`eddy bench` measures 750–820 B with the boundary's share), with room for a refinement.
+/// (`eddy bench` measures 750–820 B with the boundary's share); a refinement's are added
+/// (each method declares its own: `crate::refine::registry::Method::keeping`).
 const BYTES_PER_PARTICLE: u64 = 1024;
+/// Bytes of a refinement's step hook apart from its per-particle arrays: the hook itself, its
+/// parameters, generator and vector headers (a few hundred bytes), rounded up.
+const REFINEMENT_FIXED: u64 = 4096;
 /// Bytes per boundary sample: position, local position, velocity, volume, body, cell grid.
 const BYTES_PER_SAMPLE: u64 = 128;
 /// Bytes per grid cell: about 50 f64 fields (velocities and their copies, pressure, the
@@ -67,7 +71,16 @@ impl Footprint {
             });
             cells * statistics::BYTES_PER_CELL as f64 + bins * statistics::BYTES_PER_BIN as f64
         });
+        let refinement = if scene.refinement.is_none() {
+            0.0
+        } else {
+            // The hook's own arrays, and the operators' volumes the solver keeps for any hook.
+            let per_particle =
+                scene.refinement.bytes_per_particle() + std::mem::size_of::<Real>() as u64;
+            particles * per_particle as f64 + REFINEMENT_FIXED as f64
+        };
         let bytes = particles * BYTES_PER_PARTICLE as f64
+            + refinement
             + samples * BYTES_PER_SAMPLE as f64
             + cells * BYTES_PER_CELL as f64
             + statistics;

@@ -4,7 +4,7 @@
 //! and so strengthens them; it cannot create vortices, which is why the papers compare
 //! against it. Where eta vanishes there is no direction and no force.
 
-use super::registry::{Method, MethodParams, Range};
+use super::registry::{Interval, Method, MethodParams};
 use super::{StepContext, StepHook};
 use crate::sph::operators::WallField;
 use crate::state::{Persist, Restorer, Saver, StateError};
@@ -14,11 +14,13 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `method = "confinement"`.
+// Keeps nothing between steps: its curl and gradient are the step's own.
 pub const METHOD: Method = Method::new::<Params>(
     "confinement",
     "vorticity confinement in SPH form, a baseline of the refinement papers",
-    &[("epsilon", Range::at_least(0.0))],
-);
+    &[("epsilon", Interval::ge(0.0))],
+)
+.keeping(0);
 
 /// The keys of `method = "confinement"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

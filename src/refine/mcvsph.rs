@@ -35,7 +35,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::registry::{Method, MethodParams, Range};
+use super::registry::{Interval, Method, MethodParams};
 use super::{add_scaled, StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, Operators, WallField};
@@ -51,14 +51,21 @@ use super::biot_savart::{biot_savart, BiotSavartTree};
 
 /// MCVSPH state.
 /// `method = "mcvsph"`.
+// Kept between steps: the sampled and reach flags; omega, positions and velocity packed;
+// stretch and loss.
 pub const METHOD: Method = Method::new::<Params>(
     "mcvsph",
     "Monte Carlo vortical SPH (Ye et al., Algorithm 2)",
     &[
-        ("sample_fraction", Range::open_closed(0.0, 1.0)),
-        ("volume_coefficient", Range::closed_open(0.0, 1.0)),
-        ("theta", Range::closed_open(0.0, 1.0)),
+        ("sample_fraction", Interval::open_closed(0.0, 1.0)),
+        ("volume_coefficient", Interval::closed_open(0.0, 1.0)),
+        ("theta", Interval::closed_open(0.0, 1.0)),
     ],
+)
+.keeping(
+    2 * std::mem::size_of::<bool>() as u64
+        + 3 * std::mem::size_of::<F4>() as u64
+        + 2 * std::mem::size_of::<Vec3>() as u64,
 );
 
 /// The keys of `method = "mcvsph"`.

@@ -10,7 +10,7 @@
 //! micro-inertia cannot make the step unstable. Both curls are the shared difference curls
 //! (walls hold zero angular velocity). The rotational energy is sum_i m epsilon |omega_i|^2 / 2.
 
-use super::registry::{Method, MethodParams, Range};
+use super::registry::{Interval, Method, MethodParams};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::WallField;
@@ -22,14 +22,16 @@ use serde::{Deserialize, Serialize};
 
 /// Micropolar model state.
 /// `method = "micropolar"`.
+// Kept between steps: omega.
 pub const METHOD: Method = Method::new::<Params>(
     "micropolar",
     "micropolar SPH (Bender et al. 2019), a baseline of the refinement papers",
     &[
-        ("nu_t", Range::closed(0.0, 1.0)),
-        ("micro_inertia", Range::above(0.0)),
+        ("nu_t", Interval::closed(0.0, 1.0)),
+        ("micro_inertia", Interval::gt(0.0)),
     ],
-);
+)
+.keeping(std::mem::size_of::<Vec3>() as u64);
 
 /// The keys of `method = "micropolar"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

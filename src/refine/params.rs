@@ -25,7 +25,7 @@ use std::fmt;
 use serde::de::{Error as _, Unexpected};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::registry::{self, Method, Range, Stored};
+use super::registry::{self, Method, Stored};
 use super::StepHook;
 use crate::Real;
 
@@ -69,6 +69,11 @@ impl Refinement {
         self.0.is_none()
     }
 
+    /// Bytes per fluid particle its step hook keeps between steps (0 for none).
+    pub fn bytes_per_particle(&self) -> u64 {
+        self.0.as_ref().map_or(0, |c| c.method.bytes_per_particle)
+    }
+
     /// Checks every numeric parameter against its method's range; errors name the key.
     pub fn validate(&self) -> Result<(), InvalidParam> {
         let Some(chosen) = &self.0 else {
@@ -87,13 +92,13 @@ impl Refinement {
                     chosen.method.name
                 )
             });
-            if !range.contains(value) {
+            if !(value.is_finite() && range.contains(value)) {
                 return Err(InvalidParam {
                     key: format!("refinement.{key}"),
                     value,
                     allowed: format!(
-                        "a finite number {} for method \"{}\"",
-                        in_words(range),
+                        "{} for method \"{}\"",
+                        range.describe(true),
                         chosen.method.name
                     ),
                 });
@@ -105,16 +110,6 @@ impl Refinement {
     /// The step hook for `n` fluid particles; None for none.
     pub fn build(&self, n: usize, seed: u64) -> Option<Box<dyn StepHook>> {
         self.0.as_ref().map(|c| c.params.build(n, seed))
-    }
-}
-
-/// "in [0, 1]", "> 0": as the allowed range reads after "a finite number".
-fn in_words(range: &Range) -> String {
-    let text = range.describe();
-    if text.starts_with(['>', '<']) {
-        text
-    } else {
-        format!("in {text}")
     }
 }
 

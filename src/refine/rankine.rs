@@ -32,7 +32,7 @@
 
 use super::lanes::{CrossSum, F4};
 use super::packed::{Field, Packed, Quantity};
-use super::registry::{Method, MethodParams, Range};
+use super::registry::{Interval, Method, MethodParams};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{per_particle, WallField};
@@ -43,11 +43,13 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `method = "rankine"`.
+// Kept between steps: omega^(n-1); lost, positions, omega^n and dv packed.
 pub const METHOD: Method = Method::new::<Params>(
     "rankine",
     "Rankine vortex refinement (Wang et al. 2020, Algorithm 1)",
-    &[("beta", Range::closed(0.0, 1.0))],
-);
+    &[("beta", Interval::closed(0.0, 1.0))],
+)
+.keeping(std::mem::size_of::<Vec3>() as u64 + 4 * std::mem::size_of::<F4>() as u64);
 
 /// The keys of `method = "rankine"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

@@ -17,6 +17,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::{confinement, mcvsph, micropolar, rankine, vrsph, StepHook};
+pub use crate::interval::Interval;
 use crate::Real;
 
 /// A method's parameters once read from the scene.
@@ -25,80 +26,8 @@ pub trait MethodParams: fmt::Debug + Send + Sync + 'static {
     fn build(&self, n: usize, seed: u64) -> Box<dyn StepHook>;
 }
 
-/// The interval a numeric parameter must lie in (finite, and open or closed at each end; an
-/// infinite `hi` for no upper bound).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Range {
-    lo: Real,
-    lo_open: bool,
-    hi: Real,
-    hi_open: bool,
-}
-
-impl Range {
-    /// [lo, hi].
-    pub const fn closed(lo: Real, hi: Real) -> Self {
-        Self::new(lo, false, hi, false)
-    }
-    /// (lo, hi].
-    pub const fn open_closed(lo: Real, hi: Real) -> Self {
-        Self::new(lo, true, hi, false)
-    }
-    /// [lo, hi).
-    pub const fn closed_open(lo: Real, hi: Real) -> Self {
-        Self::new(lo, false, hi, true)
-    }
-    /// >= lo.
-    pub const fn at_least(lo: Real) -> Self {
-        Self::new(lo, false, Real::INFINITY, true)
-    }
-    /// > lo.
-    pub const fn above(lo: Real) -> Self {
-        Self::new(lo, true, Real::INFINITY, true)
-    }
-
-    const fn new(lo: Real, lo_open: bool, hi: Real, hi_open: bool) -> Self {
-        Self {
-            lo,
-            lo_open,
-            hi,
-            hi_open,
-        }
-    }
-
-    /// Whether `value` is finite and inside.
-    pub fn contains(&self, value: Real) -> bool {
-        value.is_finite()
-            && (if self.lo_open {
-                value > self.lo
-            } else {
-                value >= self.lo
-            })
-            && (if self.hi_open {
-                value < self.hi
-            } else {
-                value <= self.hi
-            })
-    }
-
-    /// `[0, 1]`, `(0, 1]`, `> 0`, `>= 0`.
-    pub fn describe(&self) -> String {
-        if self.hi.is_infinite() {
-            format!("{} {}", if self.lo_open { ">" } else { ">=" }, self.lo)
-        } else {
-            format!(
-                "{}{}, {}{}",
-                if self.lo_open { '(' } else { '[' },
-                self.lo,
-                self.hi,
-                if self.hi_open { ')' } else { ']' }
-            )
-        }
-    }
-}
-
 /// Each numeric key of a method and its range, in the order the validation checks them.
-pub type Ranges = &'static [(&'static str, Range)];
+pub type Ranges = &'static [(&'static str, Interval<'static>)];
 
 /// One refinement method: the name scene files give it, one line of what it is, and how its
 /// keys are read.
@@ -110,6 +39,10 @@ pub struct Method {
     /// The allowed range of each numeric key: the validation checks them, the scene reference
     /// (`eddy scene-keys`) prints them.
     pub ranges: Ranges,
+    /// Bytes per fluid particle its step hook keeps from one step to the next (its state and
+    /// the buffers it keeps for their memory), for the run's memory estimate; set with
+    /// [`Self::keeping`].
+    pub bytes_per_particle: u64,
     parse: fn(toml::Table) -> Result<Box<dyn Stored>, toml::de::Error>,
     schema: fn() -> schemars::Schema,
 }
@@ -124,8 +57,17 @@ impl Method {
             name,
             summary,
             ranges,
+            bytes_per_particle: 0,
             parse: parse_as::<P>,
             schema: schema_of::<P>,
+        }
+    }
+
+    /// The method whose hook keeps `bytes` per fluid particle between steps.
+    pub const fn keeping(self, bytes: u64) -> Self {
+        Self {
+            bytes_per_particle: bytes,
+            ..self
         }
     }
 

@@ -37,7 +37,7 @@
 
 use super::lanes::F4;
 use super::packed::{fill, Field, Packed, Quantity};
-use super::registry::{Method, MethodParams, Range};
+use super::registry::{Interval, Method, MethodParams};
 use super::{StepContext, StepHook};
 use crate::spatial::{permute, resize};
 use crate::sph::operators::{curl_of, WallField};
@@ -49,11 +49,13 @@ use std::f64::consts::PI;
 
 /// VRSPH with gain alpha.
 /// `method = "vrsph"`.
+// Kept between steps: the stretch; zeta, positions, velocity, strength and psi packed.
 pub const METHOD: Method = Method::new::<Params>(
     "vrsph",
     "vorticity refinement through a stream function (Liu et al. 2021, Algorithm 2)",
-    &[("alpha", Range::closed(0.0, 2.0))],
-);
+    &[("alpha", Interval::closed(0.0, 2.0))],
+)
+.keeping(std::mem::size_of::<Vec3>() as u64 + 5 * std::mem::size_of::<F4>() as u64);
 
 /// The keys of `method = "vrsph"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

@@ -107,18 +107,4 @@ impl fmt::Display for KeyPath<'_> {
     }
 }
 
-/// A number as a person reads it in a message: plain in the usual range, in exponent form when
-/// very small or very large (`1e-308`, not 308 zeros).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Number(pub crate::Real);
-
-impl fmt::Display for Number {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let v = self.0;
-        if v != 0.0 && v.is_finite() && !(1e-4..1e16).contains(&v.abs()) {
-            write!(f, "{v:e}")
-        } else {
-            write!(f, "{v}")
-        }
-    }
-}
+pub use crate::interval::Number;

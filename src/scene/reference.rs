@@ -63,7 +63,7 @@ fn refinement_rows() -> Vec<KeyRow> {
                 .iter()
                 .find(|(k, _)| row.key.strip_prefix("refinement.") == Some(k));
             if let Some((_, range)) = range {
-                row.allowed = range.describe();
+                row.allowed = range.describe(false);
             }
             match keys.iter_mut().find(|(r, _)| *r == row) {
                 Some((_, by)) => by.push(method.name),

@@ -116,6 +116,32 @@ pub struct StepStats {
     pub lost: u64,
 }
 
+/// A part of an SPH step, in the order [`SphSolver::advance`] runs them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Part {
+    Divergence,
+    /// The refinement's step hooks, each under its own name.
+    Hooks,
+    Forces,
+    Pressure,
+    Advect,
+    OpenBoundaries,
+}
+
+impl Part {
+    /// Its name in the plan and in [`SphSolver::ran`] (the hooks give their own).
+    fn name(self) -> &'static str {
+        match self {
+            Part::Divergence => "divergence",
+            Part::Hooks => "refinement",
+            Part::Forces => "forces",
+            Part::Pressure => "pressure",
+            Part::Advect => "advect",
+            Part::OpenBoundaries => "open boundaries",
+        }
+    }
+}
+
 /// The SPH fluid, its boundary samples, and the settings that drive it.
 pub struct SphSolver {
     pub kernel: CubicSpline,
@@ -412,6 +438,8 @@ impl SphSolver {
             self.ramp.factor(self.time + dt),
         );
         let ramp = self.ramp.increment(self.time, dt);
+        let parts = self.parts();
+        let runs = |part| parts.contains(&part);
         let ran = &mut self.ran;
         ran.clear();
         let FluidParticles {
@@ -480,7 +508,7 @@ impl SphSolver {
             kappa_v.par_iter_mut().for_each(|k| *k *= scale);
         }
         self.last_dt = Some(dt);
-        if dfsph && settings.divergence_solver {
+        if runs(Part::Divergence) {
             let start = Instant::now();
             stats.divergence = dfsph_solve(
                 Solve::Divergence,
@@ -493,7 +521,7 @@ impl SphSolver {
                 false,
             );
             stats.divergence_seconds = start.elapsed().as_secs_f64();
-            ran.push("divergence");
+            ran.push(Part::Divergence.name());
         }
         let viscosity = &self.params.viscosity;
         let hook_ctx = |volume, walls| StepContext {
@@ -503,7 +531,7 @@ impl SphSolver {
             spacing: self.spacing,
         };
         let volume = &mut self.refine_volume;
-        if !self.hooks.is_empty() {
+        if runs(Part::Hooks) {
             let start = Instant::now();
             operators::volumes_into(*mass, density, volume);
             for hook in &mut self.hooks {
@@ -512,7 +540,7 @@ impl SphSolver {
             }
             stats.refinement_seconds += start.elapsed().as_secs_f64();
         }
-        ran.push("forces");
+        ran.push(Part::Forces.name());
         v.par_iter_mut()
             .zip(accel.par_iter())
             .for_each(|(v, a)| *v += dt * a);
@@ -524,7 +552,7 @@ impl SphSolver {
         }
         let pressure_bounds = bounds(settings.density_tolerance, settings.min_iterations);
         let start = Instant::now();
-        ran.push("pressure");
+        ran.push(Part::Pressure.name());
         stats.pressure = if dfsph {
             dfsph_solve(
                 Solve::Density,
@@ -545,7 +573,7 @@ impl SphSolver {
             )
         };
         stats.pressure_seconds = start.elapsed().as_secs_f64();
-        if !self.hooks.is_empty() {
+        if runs(Part::Hooks) {
             let start = Instant::now();
             for hook in &mut self.hooks {
                 hook.after_pressure(&hook_ctx(volume, hook.walls()), v);
@@ -565,13 +593,13 @@ impl SphSolver {
         x.par_iter_mut()
             .zip(v.par_iter())
             .for_each(|(x, v)| *x += dt * v);
-        ran.push("advect");
+        ran.push(Part::Advect.name());
         self.time += dt;
         self.step += 1;
         let start = Instant::now();
         let mut change = self.open.exchange(x, dt, r1);
-        if !self.open.is_empty() {
-            ran.push("open boundaries");
+        if runs(Part::OpenBoundaries) {
+            ran.push(Part::OpenBoundaries.name());
         }
         let left = self.leaving(change.as_ref().map(|c| &c.keep[..]))?;
         if !left.is_empty() {
@@ -639,12 +667,44 @@ impl SphSolver {
         )
     }
 
+    /// The parts [`Self::advance`] runs, in order, from the settings and hooks: the one list
+    /// the step branches on and [`Self::describe`] reads.
+    fn parts(&self) -> Vec<Part> {
+        let settings = &self.params.pressure;
+        let mut parts = Vec::new();
+        if settings.solver == PressureSolverKind::Dfsph && settings.divergence_solver {
+            parts.push(Part::Divergence);
+        }
+        if !self.hooks.is_empty() {
+            parts.push(Part::Hooks);
+        }
+        parts.extend([Part::Forces, Part::Pressure, Part::Advect]);
+        if !self.open.is_empty() {
+            parts.push(Part::OpenBoundaries);
+        }
+        parts
+    }
+
     /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
-    /// here), read from the same settings and hooks it branches on; [`Self::ran`] names the
-    /// parts a step did run the same way.
+    /// here), each hook by its own name; [`Self::ran`] names the parts a step did run the same
+    /// way.
     pub fn describe(&self) -> Vec<(&'static str, String)> {
+        self.parts()
+            .into_iter()
+            .flat_map(|part| match part {
+                Part::Hooks => self
+                    .hooks
+                    .iter()
+                    .map(|h| (h.name(), h.describe()))
+                    .collect(),
+                _ => vec![(part.name(), self.describe_part(part))],
+            })
+            .collect()
+    }
+
+    /// What `part` does here; the hooks describe themselves.
+    fn describe_part(&self, part: Part) -> String {
         let p = &self.params;
-        let mut out = Vec::new();
         let settings = &p.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
         let signed = if settings.signed {
@@ -655,46 +715,42 @@ impl SphSolver {
         } else {
             String::new()
         };
-        if dfsph && settings.divergence_solver {
-            out.push((
-                "divergence",
-                format!(
-                    "DFSPH divergence solve{}, tolerance {} ({} to {} iterations)",
-                    signed,
-                    settings.divergence_tolerance,
-                    settings.divergence_min_iterations(),
-                    settings.max_iterations,
-                ),
-            ));
-        }
-        out.extend(self.hooks.iter().map(|h| (h.name(), h.describe())));
-        let v = &p.viscosity;
-        let mut forces = format!("gravity {:?}", p.gravity.as_slice());
-        let walls = &p.wall_viscosity;
-        if let Some(limit) = forces::viscous_step_limit(self.spacing, v.kinematic, walls) {
-            let walls = match walls.split_first() {
-                Some((first, rest)) if rest.iter().any(|w| w != first) => {
-                    format!("{walls:?} by body")
+        match part {
+            Part::Divergence => format!(
+                "DFSPH divergence solve{}, tolerance {} ({} to {} iterations)",
+                signed,
+                settings.divergence_tolerance,
+                settings.divergence_min_iterations(),
+                settings.max_iterations,
+            ),
+            Part::Hooks => "the refinement's step hooks".into(),
+            Part::Forces => {
+                let v = &p.viscosity;
+                let mut forces = format!("gravity {:?}", p.gravity.as_slice());
+                let walls = &p.wall_viscosity;
+                if let Some(limit) = forces::viscous_step_limit(self.spacing, v.kinematic, walls) {
+                    let walls = match walls.split_first() {
+                        Some((first, rest)) if rest.iter().any(|w| w != first) => {
+                            format!("{walls:?} by body")
+                        }
+                        Some((first, _)) => first.to_string(),
+                        None => "none".into(),
+                    };
+                    forces += &format!(
+                        ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {walls} \
+                         (explicit: steps of at most {limit:.3e} s)",
+                        v.kinematic
+                    );
                 }
-                Some((first, _)) => first.to_string(),
-                None => "none".into(),
-            };
-            forces += &format!(
-                ", Laplacian viscosity (Liu et al. 2021 Eq. 4) nu = {}, walls {walls} (explicit: \
-                 steps of at most {limit:.3e} s)",
-                v.kinematic
-            );
-        }
-        if v.xsph > 0.0 {
-            forces += &format!(", XSPH {}", v.xsph);
-        }
-        if let Some(ramp) = self.ramp.describe() {
-            forces += &format!("; {ramp}");
-        }
-        out.push(("forces", forces));
-        out.push((
-            "pressure",
-            format!(
+                if v.xsph > 0.0 {
+                    forces += &format!(", XSPH {}", v.xsph);
+                }
+                if let Some(ramp) = self.ramp.describe() {
+                    forces += &format!("; {ramp}");
+                }
+                forces
+            }
+            Part::Pressure => format!(
                 "{} density solve{}, tolerance {} ({} to {} iterations){}",
                 if dfsph { "DFSPH" } else { "IISPH" },
                 signed,
@@ -707,18 +763,12 @@ impl SphSolver {
                     ""
                 }
             ),
-        ));
-        out.push(("advect", "positions, then NaN and domain checks".into()));
-        if !self.open.is_empty() {
-            out.push((
-                "open boundaries",
-                format!(
-                    "{}; inflow buffers move at their velocity through the solves",
-                    self.open.describe()
-                ),
-            ));
+            Part::Advect => "positions, then NaN and domain checks".into(),
+            Part::OpenBoundaries => format!(
+                "{}; inflow buffers move at their velocity through the solves",
+                self.open.describe()
+            ),
         }
-        out
     }
 
     /// The parts the last [`Self::advance`] ran, in order.

@@ -16,7 +16,8 @@
 use ndarray::Array3;
 
 use super::{
-    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER,
+    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, DYNAMICS, SEEDING,
+    SHELL_INNER, SHELL_OUTER, SYNTHESIS, WALL_LAYER,
 };
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
@@ -30,14 +31,10 @@ use crate::pipeline::RunError;
 use crate::vortex::{synthesize, synthesize_refined, VortexParticles};
 use crate::{Real, Vec3};
 
+const ABL_ADVECTION: &str = "abl advection";
+
 /// The stage's parts, in order.
-pub const PARTS: [&str; 5] = [
-    "wall layer",
-    "abl advection",
-    "seeding",
-    "vortex dynamics",
-    "synthesis",
-];
+pub const PARTS: [&str; 5] = [WALL_LAYER, ABL_ADVECTION, SEEDING, DYNAMICS, SYNTHESIS];
 
 /// Below this fraction of the field's largest magnitude, omega_ABL is flushed to zero after
 /// advection. Interpolating advection spreads a plume's tails over the whole grid within a few
@@ -241,21 +238,21 @@ impl Stage for GridTurbulence {
             headline,
             vec![
                 (
-                    PARTS[0],
+                    WALL_LAYER,
                     format!("{wall}, nearest point per wall cell, max magnitude"),
                 ),
                 (
-                    PARTS[1],
+                    ABL_ADVECTION,
                     format!(
                         "omega_ABL by {:?} over the band its nonzero cells can reach, zero in \
                          obstacles, flushed below {FLUSH:e} of its peak",
                         self.scheme
                     ),
                 ),
-                (PARTS[2], seeding),
-                (PARTS[3], dynamics),
+                (SEEDING, seeding),
+                (DYNAMICS, dynamics),
                 (
-                    PARTS[4],
+                    SYNTHESIS,
                     format!(
                         "Eq. 14 weights onto the grid's faces, on a lattice {}x finer{}",
                         self.common.settings.params.upsample,
@@ -279,9 +276,9 @@ impl Stage for GridTurbulence {
         let abl = state.abl.as_mut().expect("a grid's omega_ABL is on cells");
         let dt = rec.dt;
         let mut stats = TurbulenceStats::default();
-        let mut laps = Laps::start();
+        let mut laps = Laps::start(&PARTS);
         self.attach(grid, abl);
-        laps.lap(0);
+        laps.lap(WALL_LAYER);
         let stagger = grid.mac.cell_stagger();
         let band = band(abl, grid, dt);
         for field in abl.iter_mut() {
@@ -297,15 +294,15 @@ impl Stage for GridTurbulence {
             std::mem::swap(field, &mut self.advected);
         }
         flush(abl, grid);
-        laps.lap(1);
+        laps.lap(ABL_ADVECTION);
         stats.seeded = self.seed(grid, abl, &mut state.vortices, dt);
-        laps.lap(2);
+        laps.lap(SEEDING);
         let report = self
             .common
             .dynamics
             .step(&mut state.vortices, &grid.mac, dt, grid.mac.dx);
         stats.dynamics(report);
-        laps.lap(3);
+        laps.lap(DYNAMICS);
         let upsample = self.common.settings.params.upsample;
         match grid.lend_fine_velocity() {
             (flow, Some(fine)) => {
@@ -322,7 +319,7 @@ impl Stage for GridTurbulence {
             // The faces under a coupled liquid carry its velocity, not the air's kernels.
             grid.bounds.apply(&mut grid.mac);
         }
-        laps.lap(4);
+        laps.lap(SYNTHESIS);
         stats.seconds = laps.seconds;
         stats.particles = state.vortices.len();
         stats.energy = state.vortices.total_energy();

@@ -83,17 +83,20 @@ pub struct TurbulenceStats {
     pub seconds: [f64; 5],
 }
 
+/// A column of the stage in `metrics.csv` and its value in a step.
+type Column = (&'static str, fn(&TurbulenceStats) -> Real);
+
 /// Columns of the turbulence stage in `metrics.csv`, then one `*_seconds` per part.
-const COLUMNS: [&str; 9] = [
-    "vortex_particles",
-    "seeded",
-    "split",
-    "born",
-    "merged",
-    "dissipated",
-    "removed",
-    "vortex_energy",
-    "abl_magnitude_sum",
+const COLUMNS: [Column; 9] = [
+    ("vortex_particles", |s| s.particles as Real),
+    ("seeded", |s| s.seeded as Real),
+    ("split", |s| s.split as Real),
+    ("born", |s| s.born as Real),
+    ("merged", |s| s.merged as Real),
+    ("dissipated", |s| s.dissipated as Real),
+    ("removed", |s| s.removed as Real),
+    ("vortex_energy", |s| s.energy),
+    ("abl_magnitude_sum", |s| s.abl_sum),
 ];
 
 impl Turbulence {
@@ -109,7 +112,7 @@ impl Turbulence {
 
     /// The metrics columns its stage adds to the metrics of `to`'s solver.
     fn added_columns(&self, to: Kind) -> AddedColumns {
-        let mut names: Vec<String> = COLUMNS.map(String::from).to_vec();
+        let mut names: Vec<String> = COLUMNS.map(|(name, _)| name.to_owned()).to_vec();
         names.extend(
             self.parts
                 .map(|p| format!("{}_seconds", p.replace(' ', "_"))),
@@ -132,18 +135,7 @@ impl Turbulence {
 impl TurbulenceStats {
     /// Its values in the order of the stage's columns.
     fn row(&self) -> Vec<Real> {
-        let mut row: Vec<Real> = [
-            self.particles,
-            self.seeded,
-            self.split,
-            self.born,
-            self.merged,
-            self.dissipated,
-            self.removed,
-        ]
-        .map(|n| n as Real)
-        .to_vec();
-        row.extend([self.energy, self.abl_sum]);
+        let mut row: Vec<Real> = COLUMNS.map(|(_, value)| value(self)).to_vec();
         row.extend(self.seconds);
         row
     }
@@ -354,22 +346,36 @@ fn push_seeds(seeds: &[Seed], vortices: &mut VortexParticles) {
     }
 }
 
-/// Wall time of each part of a step.
+/// Parts both stages run, by these names in the plan, the metrics' `*_seconds` columns and
+/// [`Laps::lap`].
+const WALL_LAYER: &str = "wall layer";
+const SEEDING: &str = "seeding";
+const DYNAMICS: &str = "vortex dynamics";
+const SYNTHESIS: &str = "synthesis";
+
+/// Wall time of each part of a step, in the order of the stage's parts.
 struct Laps {
+    parts: &'static [&'static str; 5],
     clock: Instant,
     seconds: [f64; 5],
 }
 
 impl Laps {
-    fn start() -> Self {
+    fn start(parts: &'static [&'static str; 5]) -> Self {
         Self {
+            parts,
             clock: Instant::now(),
             seconds: [0.0; 5],
         }
     }
 
-    /// Ends part `i`.
-    fn lap(&mut self, i: usize) {
+    /// Ends `part`, one of the stage's parts.
+    fn lap(&mut self, part: &str) {
+        let i = self
+            .parts
+            .iter()
+            .position(|p| *p == part)
+            .expect("a lap ends one of the stage's parts");
         self.seconds[i] = self.clock.elapsed().as_secs_f64();
         self.clock = Instant::now();
     }

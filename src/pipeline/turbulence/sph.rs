@@ -28,7 +28,8 @@
 use rayon::prelude::*;
 
 use super::{
-    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, SHELL_INNER, SHELL_OUTER,
+    push_seeds, Common, Laps, Resolution, Turbulence, TurbulenceStats, DYNAMICS, SEEDING,
+    SHELL_INNER, SHELL_OUTER, SYNTHESIS, WALL_LAYER,
 };
 use crate::abl::params::LAYER_SPACINGS;
 use crate::abl::seeding::{scatter, seed, SeedSamples};
@@ -43,14 +44,10 @@ use crate::sph::SphSolver;
 use crate::vortex::{kernel, synthesize, VortexParticles};
 use crate::{Point3, Real, Vec3};
 
+const LIQUID_BOUNDS: &str = "liquid bounds";
+
 /// The stage's parts, in order.
-pub const PARTS: [&str; 5] = [
-    "wall layer",
-    "seeding",
-    "vortex dynamics",
-    "liquid bounds",
-    "synthesis",
-];
+pub const PARTS: [&str; 5] = [WALL_LAYER, SEEDING, DYNAMICS, LIQUID_BOUNDS, SYNTHESIS];
 
 /// Name of the carried per-particle field omega_ABL, 1/s (also its name in the frames).
 pub const ABL_FIELD: &str = "abl_vorticity";
@@ -249,22 +246,22 @@ impl Stage for SphTurbulence {
             headline,
             vec![
                 (
-                    PARTS[0],
+                    WALL_LAYER,
                     format!(
                         "{wall}, nearest point per particle within {LAYER} spacings, max \
                          magnitude, carried by the particles as {ABL_FIELD}"
                     ),
                 ),
-                (PARTS[1], format!("{seeding}, clear of the free surface")),
-                (PARTS[2], format!("{dynamics}, through the SPH velocity")),
+                (SEEDING, format!("{seeding}, clear of the free surface")),
+                (DYNAMICS, format!("{dynamics}, through the SPH velocity")),
                 (
-                    PARTS[3],
+                    LIQUID_BOUNDS,
                     "remove particles outside the liquid, shrink kernels past the free surface \
                      or into walls (section 6)"
                         .into(),
                 ),
                 (
-                    PARTS[4],
+                    SYNTHESIS,
                     "Eq. 12 at the fluid particles with Eq. 14 weights".into(),
                 ),
             ],
@@ -279,22 +276,22 @@ impl Stage for SphTurbulence {
             .expect("built with the turbulence state");
         let dt = rec.dt;
         let mut stats = TurbulenceStats::default();
-        let mut laps = Laps::start();
+        let mut laps = Laps::start(&PARTS);
         self.attach(sph);
-        laps.lap(0);
+        laps.lap(WALL_LAYER);
         let surface = Surface::of(sph, self.common.seeding_params().r_max);
         stats.seeded = self.seed(sph, &surface, &mut state.vortices, dt);
-        laps.lap(1);
+        laps.lap(SEEDING);
         let report =
             self.common
                 .dynamics
                 .step(&mut state.vortices, &sph.velocity_source(), dt, sph.spacing);
         stats.dynamics(report);
-        laps.lap(2);
+        laps.lap(DYNAMICS);
         stats.removed = fit_to_liquid(&mut state.vortices, sph, &surface);
-        laps.lap(3);
+        laps.lap(LIQUID_BOUNDS);
         synthesize(&state.vortices, sph, 1)?;
-        laps.lap(4);
+        laps.lap(SYNTHESIS);
         stats.seconds = laps.seconds;
         stats.particles = state.vortices.len();
         stats.energy = state.vortices.total_energy();

@@ -5,22 +5,18 @@
 
 use std::path::Path;
 
-use anyhow::{bail, ensure};
-use eddy::grid::GridSide;
-use eddy::metrics::Probe;
-use eddy::scene::Scene;
+use super::measure::series;
+use super::StudyError;
+use crate::grid::GridSide;
+use crate::metrics::Probe;
+use crate::scene::Scene;
 
-use super::sweep::series;
-
-/// Analytic solutions a sweep can measure its runs against.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+/// Analytic solutions a sweep can measure its runs against ([`Analytic::summary`] says what
+/// each is).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Analytic {
-    /// Taylor–Green energy decay (a grid scene with `grid.initial_flow = "taylor_green"`).
     TaylorGreen,
-    /// Hydrostatic pressure rho |g| depth at the point probes of a fluid at rest.
     Hydrostatic,
-    /// Plane Poiseuille flow started from rest, at the line probes across a body-force-driven
-    /// grid channel.
     Poiseuille,
 }
 
@@ -30,6 +26,39 @@ pub enum Analytic {
 const SERIES_TERMS: usize = 1000;
 
 impl Analytic {
+    /// Every one, in the order the command line lists them.
+    pub const ALL: [Analytic; 3] = [
+        Analytic::TaylorGreen,
+        Analytic::Hydrostatic,
+        Analytic::Poiseuille,
+    ];
+
+    /// Its name on the command line (`--analytic NAME`) and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Analytic::TaylorGreen => "taylor-green",
+            Analytic::Hydrostatic => "hydrostatic",
+            Analytic::Poiseuille => "poiseuille",
+        }
+    }
+
+    /// What it is, in a line (the command line's help for its name).
+    pub fn summary(self) -> &'static str {
+        match self {
+            Analytic::TaylorGreen => {
+                "Taylor–Green energy decay (a grid scene with \
+                 `grid.initial_flow = \"taylor_green\"`)"
+            }
+            Analytic::Hydrostatic => {
+                "Hydrostatic pressure rho |g| depth at the point probes of a fluid at rest"
+            }
+            Analytic::Poiseuille => {
+                "Plane Poiseuille flow started from rest, at the line probes across a \
+                 body-force-driven grid channel"
+            }
+        }
+    }
+
     /// The study's column for this measure.
     pub fn column(self) -> &'static str {
         match self {
@@ -40,12 +69,14 @@ impl Analytic {
     }
 
     /// Refuses a scene this solution does not describe, naming what is missing.
-    pub fn check(self, scene: &Scene) -> anyhow::Result<()> {
+    pub fn check(self, scene: &Scene) -> Result<(), StudyError> {
         match self {
-            Analytic::TaylorGreen => ensure!(
-                scene.grid.as_ref().and_then(|g| g.initial_flow).is_some(),
-                "--analytic taylor-green: the scene has no `grid.initial_flow = \"taylor_green\"`"
-            ),
+            Analytic::TaylorGreen => {
+                self.require(
+                    scene.grid.as_ref().and_then(|g| g.initial_flow).is_some(),
+                    || "the scene has no `grid.initial_flow = \"taylor_green\"`".into(),
+                )?;
+            }
             Analytic::Hydrostatic => {
                 hydrostatic_probes(scene)?;
             }
@@ -67,27 +98,42 @@ impl Analytic {
             Analytic::Poiseuille => poiseuille_error(dir),
         }
     }
+
+    /// The error of a scene this solution does not describe, saying what is missing.
+    fn refuses(self, reason: String) -> StudyError {
+        StudyError::NotDescribed {
+            analytic: self.name(),
+            reason,
+        }
+    }
+
+    /// Refuses the scene, saying `reason`, unless `holds`.
+    fn require(self, holds: bool, reason: impl FnOnce() -> String) -> Result<(), StudyError> {
+        if holds {
+            Ok(())
+        } else {
+            Err(self.refuses(reason()))
+        }
+    }
 }
 
 /// The run's resolved scene.
 fn run_scene(dir: &Path) -> Option<Scene> {
-    eddy::scene::load(&dir.join("scene.toml"), &[]).ok()
+    crate::scene::load(&dir.join("scene.toml"), &[]).ok()
 }
 
 /// The point probes of a fluid at rest with the exact pressure rho |g| d at each, d the depth
 /// under the top of the fluid blocks along gravity (where the surface of a block that holds its
 /// volume lies at rest). Errs without a fluid, gravity or a point probe under the surface.
-fn hydrostatic_probes(scene: &Scene) -> anyhow::Result<Vec<(String, f64)>> {
+fn hydrostatic_probes(scene: &Scene) -> Result<Vec<(String, f64)>, StudyError> {
+    let hydrostatic = Analytic::Hydrostatic;
     let Some(fluid) = &scene.fluid else {
-        bail!("--analytic hydrostatic: the scene has no [fluid]");
+        return Err(hydrostatic.refuses("the scene has no [fluid]".into()));
     };
-    let g = eddy::Vec3::from(scene.gravity);
-    ensure!(
-        g.norm() > 0.0,
-        "--analytic hydrostatic: the scene has no gravity"
-    );
+    let g = crate::Vec3::from(scene.gravity);
+    hydrostatic.require(g.norm() > 0.0, || "the scene has no gravity".into())?;
     let up = -g / g.norm();
-    let height = |p: &[f64; 3]| eddy::Vec3::from(*p).dot(&up);
+    let height = |p: &[f64; 3]| crate::Vec3::from(*p).dot(&up);
     let top = fluid
         .blocks
         .iter()
@@ -99,27 +145,21 @@ fn hydrostatic_probes(scene: &Scene) -> anyhow::Result<Vec<(String, f64)>> {
             })
         })
         .fold(f64::NEG_INFINITY, f64::max);
-    ensure!(
-        top.is_finite(),
-        "--analytic hydrostatic: the fluid has no blocks"
-    );
+    hydrostatic.require(top.is_finite(), || "the fluid has no blocks".into())?;
     let mut probes = Vec::new();
     for p in &scene.probes {
         if let Probe::Point { name, position } = p {
             let depth = top - height(position);
-            ensure!(
-                depth > 0.0,
-                "--analytic hydrostatic: point probe `{name}` lies {:.4} m above the fluid's \
-                 top",
-                -depth
-            );
+            hydrostatic.require(depth > 0.0, || {
+                format!(
+                    "point probe `{name}` lies {:.4} m above the fluid's top",
+                    -depth
+                )
+            })?;
             probes.push((name.clone(), fluid.density * g.norm() * depth));
         }
     }
-    ensure!(
-        !probes.is_empty(),
-        "--analytic hydrostatic: the scene has no point probe"
-    );
+    hydrostatic.require(!probes.is_empty(), || "the scene has no point probe".into())?;
     Ok(probes)
 }
 
@@ -147,21 +187,28 @@ fn hydrostatic_error(dir: &Path) -> Option<f64> {
 /// A plane Poiseuille channel: (body force along x, kinematic viscosity, the plates' y, the
 /// line probes' names). Errs unless the grid applies a gravity along x as a force, is periodic
 /// in x, has no-slip walls at y_min and y_max, and has a line probe.
-fn poiseuille_channel(scene: &Scene) -> anyhow::Result<(f64, f64, [f64; 2], Vec<String>)> {
+fn poiseuille_channel(scene: &Scene) -> Result<(f64, f64, [f64; 2], Vec<String>), StudyError> {
+    let poiseuille = Analytic::Poiseuille;
     let Some(grid) = &scene.grid else {
-        bail!("--analytic poiseuille: the scene has no [grid]");
+        return Err(poiseuille.refuses("the scene has no [grid]".into()));
     };
-    ensure!(
+    poiseuille.require(
         grid.gravity && scene.gravity[1] == 0.0 && scene.gravity[2] == 0.0,
-        "--analytic poiseuille: the channel is driven by a body force along x: set `gravity = \
-         [g, 0, 0]` and `grid.gravity = true`"
-    );
+        || {
+            "the channel is driven by a body force along x: set `gravity = [g, 0, 0]` and \
+             `grid.gravity = true`"
+                .into()
+        },
+    )?;
     let b = &grid.boundary;
-    ensure!(
+    poiseuille.require(
         b.x_min == GridSide::Periodic && b.y_min == GridSide::Wall && b.y_max == GridSide::Wall,
-        "--analytic poiseuille: the channel is periodic along x (grid.boundary.x_min, x_max) \
-         between no-slip walls at y_min and y_max"
-    );
+        || {
+            "the channel is periodic along x (grid.boundary.x_min, x_max) between no-slip walls \
+             at y_min and y_max"
+                .into()
+        },
+    )?;
     let lines: Vec<String> = scene
         .probes
         .iter()
@@ -170,10 +217,9 @@ fn poiseuille_channel(scene: &Scene) -> anyhow::Result<(f64, f64, [f64; 2], Vec<
             _ => None,
         })
         .collect();
-    ensure!(
-        !lines.is_empty(),
-        "--analytic poiseuille: the scene has no line probe to compare"
-    );
+    poiseuille.require(!lines.is_empty(), || {
+        "the scene has no line probe to compare".into()
+    })?;
     Ok((
         scene.gravity[0],
         scene.viscosity.kinematic,

@@ -77,6 +77,35 @@ pub struct GridStepStats {
     pub total_seconds: f64,
 }
 
+/// A part of a grid step, in the order [`GridSolver::advance`] runs them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Part {
+    Obstacles,
+    Inflow,
+    Advect,
+    Forces,
+    StaticFlow,
+    Viscosity,
+    Pressure,
+    Average,
+}
+
+impl Part {
+    /// Its name in the plan and in [`GridSolver::ran`].
+    fn name(self) -> &'static str {
+        match self {
+            Part::Obstacles => "obstacles",
+            Part::Inflow => "inflow",
+            Part::Advect => "advect",
+            Part::Forces => "forces",
+            Part::StaticFlow => "static flow",
+            Part::Viscosity => "viscosity",
+            Part::Pressure => "pressure",
+            Part::Average => "average",
+        }
+    }
+}
+
 /// The MAC-grid fluid of a scene.
 pub struct GridSolver {
     pub mac: MacGrid,
@@ -272,14 +301,15 @@ impl GridSolver {
             before.clone_from(u);
         }
         self.ran.clear();
-        if self.bodies.iter().any(RigidBody::is_moving) {
-            self.ran.push("obstacles");
+        let parts = self.parts();
+        if parts.contains(&Part::Obstacles) {
+            self.ran.push(Part::Obstacles.name());
             if self.bounds_time.take() != Some(self.time + dt) {
                 self.rebuild_boundaries(self.time + dt);
             }
         }
         if let Some(modes) = &self.params.inflow_turbulence {
-            self.ran.push("inflow");
+            self.ran.push(Part::Inflow.name());
             self.bounds
                 .fluctuate_inflow(&self.mac, modes, self.time + dt);
         }
@@ -291,16 +321,18 @@ impl GridSolver {
         if let Some(smoke) = self.smoke.as_mut() {
             smoke.advect(&self.mac, dt, scheme, self.step);
         }
-        self.ran.push("advect");
+        if parts.contains(&Part::Advect) {
+            self.ran.push(Part::Advect.name());
+        }
         if let Some(frozen) = &self.frozen {
             // Figure 11: the stored flow, plus what the turbulence stage synthesised onto it
             // this step, has carried the smoke; the velocity itself is not advanced.
             if let Some(smoke) = self.smoke.as_mut() {
-                self.ran.push("forces");
+                self.ran.push(Part::Forces.name());
                 smoke.apply_sources(&mut self.mac, &self.bounds, self.time);
             }
             self.mac.u.clone_from(frozen);
-            self.ran.push("static flow");
+            self.ran.push(Part::StaticFlow.name());
         } else if self.params.reflection {
             self.reflected_update(dt, &mut stats)?;
         } else {
@@ -314,8 +346,8 @@ impl GridSolver {
             stats.pressure_residual = solve.relative_residual;
         }
         stats.advect_seconds = t0.elapsed().as_secs_f64() - stats.project_seconds;
-        if self.frozen.is_none() {
-            self.ran.push("pressure");
+        if parts.contains(&Part::Pressure) {
+            self.ran.push(Part::Pressure.name());
         }
 
         self.time += dt;
@@ -323,7 +355,7 @@ impl GridSolver {
         stats.max_divergence = max_divergence(&self.mac, &self.bounds);
         stats.change_rate = change_rate(&self.before, &self.mac.u) / dt;
         if let Some((start, avg)) = self.average.as_mut() {
-            self.ran.push("average");
+            self.ran.push(Part::Average.name());
             if self.time > *start {
                 avg.add(&self.mac, dt.min(self.time - *start));
             }
@@ -454,65 +486,115 @@ impl GridSolver {
         self.frozen.is_some()
     }
 
-    /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
-    /// here), read from the same settings it branches on.
-    pub fn describe(&self) -> Vec<(&'static str, String)> {
+    /// The parts [`Self::advance`] runs, in order, from the bodies, settings and fields: the
+    /// one list that [`Self::describe`] reads and [`Self::ran`] names the same way.
+    fn parts(&self) -> Vec<Part> {
         let p = &self.params;
-        let mut out = Vec::new();
-        let moving = self.bodies.iter().filter(|b| b.is_moving()).count();
-        if moving > 0 {
-            out.push((
-                "obstacles",
-                format!("{moving} moving obstacles re-voxelised every step"),
-            ));
+        let mut parts = Vec::new();
+        if self.bodies.iter().any(RigidBody::is_moving) {
+            parts.push(Part::Obstacles);
         }
-        if let Some(modes) = &p.inflow_turbulence {
-            let s = &modes.spec;
-            out.push((
-                "inflow",
-                format!(
-                    "inflow turbulence: {} random modes, intensity {} of the inflow speed, \
-                     eddy size {} m, carried at the inflow velocity",
-                    s.modes, s.intensity, s.length
-                ),
-            ));
+        if p.inflow_turbulence.is_some() {
+            parts.push(Part::Inflow);
         }
+        // A stored flow without smoke has nothing to advect.
+        if self.frozen.is_none() || self.smoke.is_some() {
+            parts.push(Part::Advect);
+        }
+        if self.frozen.is_some() {
+            if self.smoke.is_some() {
+                parts.push(Part::Forces);
+            }
+            parts.push(Part::StaticFlow);
+        } else {
+            if self.has_forces() {
+                parts.push(Part::Forces);
+            }
+            if p.viscosity > 0.0 {
+                parts.push(Part::Viscosity);
+            }
+            parts.push(Part::Pressure);
+        }
+        if p.average_from.is_some() {
+            parts.push(Part::Average);
+        }
+        parts
+    }
+
+    /// The parts [`Self::advance`] runs, in order, for `eddy run --plan`: (part, what it does
+    /// here).
+    pub fn describe(&self) -> Vec<(&'static str, String)> {
+        self.parts()
+            .into_iter()
+            .map(|part| (part.name(), self.describe_part(part)))
+            .collect()
+    }
+
+    /// What `part` does here.
+    fn describe_part(&self, part: Part) -> String {
+        let p = &self.params;
         let scheme = match p.advection {
             Advection::SemiLagrangian => "semi-Lagrangian",
             Advection::Maccormack => "MacCormack",
         };
-        let scalars = self
-            .smoke
-            .as_ref()
-            .map_or(String::new(), |s| format!(" and {}", s.describe()));
-        let reflection = if p.reflection {
-            ", advection-reflection (two projections)"
-        } else {
-            ""
-        };
-        if self.frozen.is_some() {
-            if let Some(s) = &self.smoke {
-                out.push((
-                    "advect",
-                    format!(
-                        "{scheme} advection of the {} by the stored flow",
-                        s.describe()
-                    ),
-                ));
-                out.push(("forces", format!("smoke sources ({})", s.source_count())));
+        match part {
+            Part::Obstacles => {
+                let moving = self.bodies.iter().filter(|b| b.is_moving()).count();
+                format!("{moving} moving obstacles re-voxelised every step")
             }
-            out.push((
-                "static flow",
-                "velocity restored to the stored field: no velocity advection, no projection"
-                    .into(),
-            ));
-            out.extend(self.describe_average());
-            return out;
+            Part::Inflow => p.inflow_turbulence.as_ref().map_or(String::new(), |m| {
+                let s = &m.spec;
+                format!(
+                    "inflow turbulence: {} random modes, intensity {} of the inflow speed, \
+                     eddy size {} m, carried at the inflow velocity",
+                    s.modes, s.intensity, s.length
+                )
+            }),
+            Part::Advect => match (&self.frozen, &self.smoke) {
+                (Some(_), Some(s)) => format!(
+                    "{scheme} advection of the {} by the stored flow",
+                    s.describe()
+                ),
+                _ => {
+                    let scalars = self
+                        .smoke
+                        .as_ref()
+                        .map_or(String::new(), |s| format!(" and {}", s.describe()));
+                    let reflection = if p.reflection {
+                        ", advection-reflection (two projections)"
+                    } else {
+                        ""
+                    };
+                    format!("{scheme} advection of velocity{scalars}{reflection}")
+                }
+            },
+            Part::Forces => self.describe_forces(),
+            Part::StaticFlow => {
+                "velocity restored to the stored field: no velocity advection, no projection".into()
+            }
+            Part::Viscosity => format!(
+                "implicit ({:?}) nu = {} m^2/s, MGPCG per component",
+                p.viscosity_scheme, p.viscosity
+            ),
+            Part::Pressure => format!(
+                "MGPCG projection to relative residual {} (at most {} iterations)",
+                p.pressure.tolerance, p.pressure.max_iterations
+            ),
+            Part::Average => p.average_from.map_or(String::new(), |t| {
+                format!("time-averaged velocity from t = {t} s")
+            }),
         }
-        out.push((
-            "advect",
-            format!("{scheme} advection of velocity{scalars}{reflection}"),
-        ));
+    }
+
+    /// The forces of a step: a stored flow's smoke sources alone, or the smoke's sources and
+    /// buoyancy, confinement and gravity.
+    fn describe_forces(&self) -> String {
+        let p = &self.params;
+        if self.frozen.is_some() {
+            return self.smoke.as_ref().map_or(String::new(), |s| {
+                format!("smoke sources ({})", s.source_count())
+            });
+        }
         let mut forces = Vec::new();
         if let Some(s) = &self.smoke {
             let (density, heat) = s.buoyancy();
@@ -532,32 +614,7 @@ impl GridSolver {
         if p.gravity_force {
             forces.push(format!("gravity {:?}", p.gravity.as_slice()));
         }
-        if self.has_forces() {
-            out.push(("forces", forces.join(", ")));
-        }
-        if p.viscosity > 0.0 {
-            out.push((
-                "viscosity",
-                format!(
-                    "implicit ({:?}) nu = {} m^2/s, MGPCG per component",
-                    p.viscosity_scheme, p.viscosity
-                ),
-            ));
-        }
-        out.push((
-            "pressure",
-            format!(
-                "MGPCG projection to relative residual {} (at most {} iterations)",
-                p.pressure.tolerance, p.pressure.max_iterations
-            ),
-        ));
-        out.extend(self.describe_average());
-        out
-    }
-
-    fn describe_average(&self) -> Option<(&'static str, String)> {
-        let t = self.params.average_from?;
-        Some(("average", format!("time-averaged velocity from t = {t} s")))
+        forces.join(", ")
     }
 
     /// Forces, sources, boundary conditions and viscosity over `dt`, before a projection.
@@ -678,7 +735,7 @@ impl GridSolver {
     /// outside since the last step ([`Self::add_face_impulse`]).
     fn apply_forces(&mut self, dt: Real) {
         if self.has_forces() {
-            self.ran.push("forces");
+            self.ran.push(Part::Forces.name());
         }
         self.apply_impulses();
         if let Some(smoke) = self.smoke.as_mut() {
@@ -706,7 +763,7 @@ impl GridSolver {
         dt: Real,
         unforced: Option<&[Array3<Real>; 3]>,
     ) -> Result<usize, GridError> {
-        self.ran.push("viscosity");
+        self.ran.push(Part::Viscosity.name());
         let a = self.params.viscosity * dt / (self.mac.dx * self.mac.dx);
         let mut iterations = 0;
         for c in 0..3 {

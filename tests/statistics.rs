@@ -173,6 +173,61 @@ fn running_moments_equal_two_pass_on_particles() {
     assert_two_pass(&stats.cells, &samples);
 }
 
+/// The statistics and the metrics share one curl of the state they both measure
+/// (`Simulation::particle_vorticity`): after every step, sampled (every second step) or not,
+/// what they shared is the vorticity of the state the step ended with, never an earlier
+/// step's; and each metrics row's enstrophy is that of the state its step started from,
+/// computed here apart.
+#[test]
+fn the_statistics_and_the_metrics_share_the_current_vorticity() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let scene = eddy::scene::load(
+        &path,
+        &[
+            "fluid.spacing=0.04".into(),
+            "statistics.from=0".into(),
+            "statistics.every=2".into(),
+            "output.vtk=false".into(),
+        ],
+    )
+    .expect("loads");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut p = Pipeline::build(&scene).expect("builds");
+    p.open(dir.path()).expect("opens");
+    let mut enstrophy = Vec::new();
+    for step in 0..8 {
+        p.step(None, None).expect("steps");
+        let sph = p.sim.sph.as_ref().expect("a fluid");
+        let now = sph.vorticity();
+        let shared = p.sim.particle_vorticity.as_ref().expect("taken this step");
+        assert!(
+            shared == &now,
+            "step {step}: the shared vorticity is not the current state's"
+        );
+        enstrophy.push(eddy::metrics::vorticity_stats(&now, sph.fluid.volume()).enstrophy);
+    }
+    let metrics = std::fs::read_to_string(dir.path().join("metrics.csv")).expect("metrics");
+    let mut lines = metrics.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let column = header
+        .iter()
+        .position(|c| *c == "enstrophy")
+        .expect("enstrophy");
+    let written: Vec<Real> = lines
+        .map(|l| {
+            l.split(',')
+                .nth(column)
+                .expect("a value")
+                .parse()
+                .expect("a number")
+        })
+        .collect();
+    // Row k holds the state step k started from: the one step k - 1 ended with.
+    assert_eq!(written.len(), 8);
+    assert!(enstrophy[0] > 0.0, "a dam break has enstrophy");
+    assert_eq!(&written[1..], &enstrophy[..7]);
+}
+
 /// Plane Poiseuille flow between plates 1 m apart, nu = 1 m²/s and g = 8 m/s² (u_max = 1 m/s),
 /// which settles in a few tenths of a second (the slowest mode decays as exp(-pi² nu t)):
 /// averaged over t = 2–3 s the mean is the steady profile g y (H - y) / (2 nu) within the

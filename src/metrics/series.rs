@@ -44,7 +44,14 @@ impl MetricsRecorder {
     }
 
     /// Measures the state of `solver` (call before it advances); only requested metrics run.
-    pub fn measure(&self, solver: &SphSolver, gravity: &Vec3) -> StateMetrics {
+    /// `omega` is the state's vorticity when another stage took it; taken here, it is left
+    /// there for the next.
+    pub fn measure(
+        &self,
+        solver: &SphSolver,
+        gravity: &Vec3,
+        omega: &mut Option<Vec<Vec3>>,
+    ) -> StateMetrics {
         let fluid = &solver.fluid;
         let mut errors = None;
         let mut density_errors = || {
@@ -52,8 +59,10 @@ impl MetricsRecorder {
         };
         let mut vorticity = None;
         let mut vorticity = || {
-            *vorticity
-                .get_or_insert_with(|| super::vorticity_stats(&solver.vorticity(), fluid.volume()))
+            *vorticity.get_or_insert_with(|| {
+                let omega = omega.get_or_insert_with(|| solver.vorticity());
+                super::vorticity_stats(omega, fluid.volume())
+            })
         };
         let total = || {
             super::kinetic_energy(fluid.mass, &fluid.v)

@@ -142,19 +142,6 @@ pub struct StatisticsFields {
 /// One bin's sums over its particles in one sample: count, velocity, vorticity, enstrophy.
 type BinSum = [Real; 8];
 
-/// Particles a thread bins at a time.
-const BIN_CHUNK: usize = 4096;
-
-/// Adds one particle of velocity `v` and vorticity `w` to a bin's sums.
-fn add_particle(sum: &mut BinSum, v: &Vec3, w: &Vec3) {
-    sum[0] += 1.0;
-    for c in 0..3 {
-        sum[1 + c] += v[c];
-        sum[4 + c] += w[c];
-    }
-    sum[7] += 0.5 * w.norm_squared();
-}
-
 /// The running statistics of one medium on its lattice.
 #[derive(Debug, Clone)]
 pub struct FlowStatistics {
@@ -275,40 +262,20 @@ impl FlowStatistics {
         if self.bins.len() != self.cells.len() {
             self.bins = vec![[0.0; 8]; self.cells.len()];
         }
-        // Each chunk of particles sums its runs of particles in one bin in parallel (the
-        // solver keeps them in z-order, so a bin's particles mostly sit together); the runs
-        // then enter their bins in particle order.
-        let lattice = &self.lattice;
-        let runs: Vec<Vec<(usize, BinSum)>> = x
-            .par_chunks(BIN_CHUNK)
-            .zip(v.par_chunks(BIN_CHUNK))
-            .zip(omega.par_chunks(BIN_CHUNK))
-            .map(|((x, v), omega)| {
-                let mut runs: Vec<(usize, BinSum)> = Vec::new();
-                for ((x, v), w) in x.iter().zip(v).zip(omega) {
-                    let Some(b) = lattice.cell_of(x) else {
-                        continue;
-                    };
-                    match runs.last_mut() {
-                        Some((last, sum)) if *last == b => add_particle(sum, v, w),
-                        _ => {
-                            let mut sum = [0.0; 8];
-                            add_particle(&mut sum, v, w);
-                            runs.push((b, sum));
-                        }
-                    }
-                }
-                runs
-            })
-            .collect();
-        for (b, run) in runs.into_iter().flatten() {
+        for ((x, v), w) in x.iter().zip(v).zip(omega) {
+            let Some(b) = self.lattice.cell_of(x) else {
+                continue;
+            };
             let sum = &mut self.bins[b];
             if sum[0] == 0.0 {
                 self.touched.push(b);
             }
-            for (s, r) in sum.iter_mut().zip(run) {
-                *s += r;
+            sum[0] += 1.0;
+            for c in 0..3 {
+                sum[1 + c] += v[c];
+                sum[4 + c] += w[c];
             }
+            sum[7] += 0.5 * w.norm_squared();
         }
         for &b in &self.touched {
             let sum = std::mem::take(&mut self.bins[b]);

@@ -356,8 +356,13 @@ impl Pipeline {
             ..Default::default()
         };
         self.stage_seconds.resize(self.stages.len(), 0.0);
+        // The state may have been edited between steps (Python, a restore).
+        sim.particle_vorticity = None;
         for (stage, seconds) in self.stages.iter_mut().zip(&mut self.stage_seconds) {
             let started = Instant::now();
+            if !stage.measures_only() {
+                sim.particle_vorticity = None;
+            }
             stage.run(sim, &mut rec)?;
             *seconds += started.elapsed().as_secs_f64();
             if let Some(trace) = trace.as_deref_mut() {

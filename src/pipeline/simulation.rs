@@ -7,7 +7,7 @@ use crate::grid::{GridError, GridSolver};
 use crate::io::IoError;
 use crate::sph::{Instability, SphSolver};
 use crate::vortex::VortexError;
-use crate::Real;
+use crate::{Real, Vec3};
 
 /// Why a step could not be taken.
 #[derive(Debug, thiserror::Error)]
@@ -38,6 +38,11 @@ pub struct Simulation {
     pub exchange: Option<Exchange>,
     /// The running statistics of each medium, when the scene has `[statistics]`.
     pub statistics: Vec<MediumStatistics>,
+    /// The SPH fluid's vorticity (`SphSolver::vorticity`) of the current state, taken by the
+    /// first stage that needs it and shared with the stages after it that only measure (the
+    /// statistics and the metrics read the same curl of the same state); the driver drops it
+    /// before any stage that may change the state ([`super::stages::Stage::measures_only`]).
+    pub particle_vorticity: Option<Vec<Vec3>>,
     pub(super) time: Real,
     pub(super) steps: u64,
 }
@@ -52,6 +57,7 @@ impl Simulation {
             sph_turbulence: None,
             exchange: None,
             statistics: Vec::new(),
+            particle_vorticity: None,
             time: 0.0,
             steps: 0,
         }

@@ -79,6 +79,13 @@ pub trait Stage: Send {
         &[]
     }
 
+    /// Whether its run only measures, leaving every solver's state as it found it, so that
+    /// what a stage before it measured of the state ([`Simulation::particle_vorticity`])
+    /// still holds after it.
+    fn measures_only(&self) -> bool {
+        false
+    }
+
     /// The metrics columns it adds to a solver's `metrics.csv`; its `run` then pushes their
     /// values to [`StepRecord::added`] every step.
     fn added_columns(&self, _sim: &Simulation) -> Option<AddedColumns> {
@@ -306,7 +313,7 @@ impl Stage for SphMetrics {
         let extra: Vec<String> = self.added.iter().flat_map(|a| a.names.clone()).collect();
         let recorder = MetricsRecorder::create(&out.join(&self.file), &self.metrics, &extra)?;
         let sph = sim.sph.as_ref().expect("an SPH stage has a fluid");
-        let state = recorder.measure(sph, &self.gravity);
+        let state = recorder.measure(sph, &self.gravity, &mut None);
         self.recorder = Some((recorder, state));
         Ok(())
     }
@@ -317,8 +324,18 @@ impl Stage for SphMetrics {
         };
         let extra: Vec<Real> = rec.added_to(Kind::Particles).collect();
         recorder.write(rec.step, rec.time, state, &stats, &extra)?;
-        *state = recorder.measure(sim.sph(), &self.gravity);
+        let Simulation {
+            sph,
+            particle_vorticity,
+            ..
+        } = sim;
+        let sph = sph.as_ref().expect("an SPH stage has a fluid");
+        *state = recorder.measure(sph, &self.gravity, particle_vorticity);
         Ok(())
+    }
+
+    fn measures_only(&self) -> bool {
+        true
     }
 
     fn series(&self) -> Option<&CsvSeries> {
@@ -331,7 +348,7 @@ impl Stage for SphMetrics {
 
     fn state_edited(&mut self, sim: &Simulation) {
         if let (Some((recorder, state)), Some(sph)) = (self.recorder.as_mut(), sim.sph.as_ref()) {
-            *state = recorder.measure(sph, &self.gravity);
+            *state = recorder.measure(sph, &self.gravity, &mut None);
         }
     }
 }

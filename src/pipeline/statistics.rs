@@ -153,20 +153,25 @@ impl Stage for StatisticsStage {
             grid,
             sph,
             statistics,
+            particle_vorticity,
             ..
         } = sim;
         for m in statistics.iter_mut() {
             match (m.kind, grid.as_ref(), sph.as_ref()) {
                 (Kind::Grid, Some(g), _) => m.stats.sample_grid(g, weight, span),
                 (Kind::Particles, _, Some(s)) => {
-                    let omega = s.vorticity();
+                    let omega = particle_vorticity.get_or_insert_with(|| s.vorticity());
                     m.stats
-                        .sample_particles(&s.fluid.x, &s.fluid.v, &omega, weight, span);
+                        .sample_particles(&s.fluid.x, &s.fluid.v, omega, weight, span);
                 }
                 _ => {}
             }
         }
         Ok(())
+    }
+
+    fn measures_only(&self) -> bool {
+        true
     }
 
     fn ran<'a>(&self, sim: &'a Simulation) -> &'a [&'static str] {

@@ -2,10 +2,8 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -553,18 +551,8 @@ fn smoke_sources_that_cannot_work_are_named() {
 
 /// Issue 52, 4: the memory estimate a run is admitted by bounds what the SPH set-up allocates,
 /// the neighbour lists and pair caches included, for every shipped SPH scene (those needing a
-/// precomputed database aside), and what a refinement's step hook adds to it once it has
-/// stepped. The hooks' per-particle state (Rankine's omega^(n-1), VRSPH's zeta and stretching,
-/// MCVSPH's samples and vorticity, micropolar's angular velocity) and the buffers they keep are
-/// made in their first steps, after the set-up, and are no part of the solver's
-/// `memory_bytes`: they are measured as the heap they hold, in a child process
-/// ([`refinement_heap_in_a_child`], whose allocator counts every byte). For the hydrostatic
-/// tank without a refinement and under each registered method, three steps in:
-///
-/// - what the refinement holds (the heap with the method less the heap without: the hook's
-///   arrays and the operators' volumes the solver keeps for it) is at most what the estimate
-///   adds for it (the estimate with the method less the one without);
-/// - the heap the whole pipeline holds, the hook's included, is at most the estimate.
+/// precomputed database aside). What a refinement's step hook adds once it has stepped is
+/// measured as heap in `tests/memory_estimate.rs`, a test binary of its own.
 #[test]
 fn the_memory_estimate_bounds_the_sph_set_up() {
     let mut checked = 0;
@@ -590,139 +578,4 @@ fn the_memory_estimate_bounds_the_sph_set_up() {
         checked += 1;
     }
     assert!(checked >= 10, "{checked} scenes");
-
-    let _serial = common::hdf5_or_child();
-    let out = Command::new(std::env::current_exe().expect("this test binary"))
-        .args(["refinement_heap_in_a_child", "--exact", "--ignored"])
-        .args(["--nocapture", "--test-threads", "1"])
-        .env(HEAP_CHILD, "1")
-        .output()
-        .expect("the child runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    // method, particles, estimate, memory_bytes, heap held (the test harness may have begun
-    // the line with the test's name).
-    let rows: Vec<(String, [f64; 4])> = stdout
-        .lines()
-        .filter_map(|l| l.split_once("heap ").map(|(_, row)| row))
-        .map(|l| {
-            let mut w = l.split_whitespace();
-            let method = w.next().expect("a method").to_owned();
-            let n: Vec<f64> = w.map(|x| x.parse().expect("a number")).collect();
-            (method, [n[0], n[1], n[2], n[3]])
-        })
-        .collect();
-    let methods = eddy::refine::registry::methods();
-    assert_eq!(rows.len(), methods.len() + 1, "{stdout}");
-    assert_eq!(rows[0].0, "none");
-    let [_, estimate_none, _, held_none] = rows[0].1;
-    for (method, [n, estimate, used, held]) in &rows {
-        let added = held - held_none;
-        let allowed = estimate - estimate_none;
-        eprintln!(
-            "{method}: {n} particles, {held:.0} B held ({used:.0} B in memory_bytes), \
-             {estimate:.0} B estimated; the refinement adds {added:.0} B ({:.2} B per \
-             particle), the estimate {allowed:.0} B",
-            added / n
-        );
-        assert!(
-            added <= allowed,
-            "{method}: its hook and volumes hold {added:.0} B over {n} particles, the estimate \
-             adds {allowed:.0} B"
-        );
-        assert!(
-            held <= estimate,
-            "{method}: the pipeline holds {held:.0} B, {estimate:.0} B estimated"
-        );
-    }
-}
-
-/// Set in the environment of [`refinement_heap_in_a_child`]'s process.
-const HEAP_CHILD: &str = "EDDY_TEST_HEAP_CHILD";
-
-/// The heap this process holds, bytes: every allocation counted as it is made and freed (the
-/// measure of [`refinement_heap_in_a_child`], which runs alone in its process).
-static HELD: AtomicUsize = AtomicUsize::new(0);
-
-/// The system allocator, counting into [`HELD`].
-struct Counting;
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            HELD.fetch_add(layout.size(), Relaxed);
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            HELD.fetch_add(layout.size(), Relaxed);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        HELD.fetch_sub(layout.size(), Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            HELD.fetch_add(new_size, Relaxed);
-            HELD.fetch_sub(layout.size(), Relaxed);
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static COUNTING: Counting = Counting;
-
-/// Run by [`the_memory_estimate_bounds_the_sph_set_up`] in a process of its own (a test beside
-/// it would allocate into the count): for the hydrostatic tank (fluid at rest, so that every
-/// run has the same neighbourhoods) without a refinement and under each registered method,
-/// prints `heap METHOD PARTICLES ESTIMATE MEMORY_BYTES HELD`, HELD the heap the built pipeline
-/// holds after three steps beyond what the process held before it was built.
-#[test]
-#[ignore = "run in a child process by the_memory_estimate_bounds_the_sph_set_up"]
-fn refinement_heap_in_a_child() {
-    if std::env::var_os(HEAP_CHILD).is_none() {
-        return;
-    }
-    let methods = eddy::refine::registry::methods();
-    let names = std::iter::once("none").chain(methods.iter().map(|m| m.name));
-    // The first build starts the thread pool and fills the lazy tables; it is not counted.
-    for (i, name) in std::iter::once("none").chain(names).enumerate() {
-        let overrides = [
-            format!("refinement.method={name:?}"),
-            "output.metrics=[]".into(),
-        ];
-        let scene =
-            eddy::scene::load(&shipped("hydrostatic_tank.toml"), &overrides).expect("the scene");
-        let bodies = eddy::scene::build::bodies(&scene).expect("bodies");
-        let estimate = eddy::pipeline::Footprint::of(&scene, &bodies).bytes;
-        let before = HELD.load(Relaxed);
-        let mut p = Pipeline::build(&scene).expect("builds");
-        for _ in 0..3 {
-            p.step(None, None).expect("steps");
-        }
-        let held = HELD.load(Relaxed) as f64 - before as f64;
-        let sph = p.sim.sph.as_ref().expect("a fluid");
-        if i == 0 {
-            continue;
-        }
-        println!(
-            "heap {name} {} {estimate} {} {held}",
-            sph.fluid.len(),
-            sph.memory_bytes()
-        );
-    }
 }

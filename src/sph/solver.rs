@@ -691,19 +691,13 @@ impl SphSolver {
     pub fn describe(&self) -> Vec<(&'static str, String)> {
         self.parts()
             .into_iter()
-            .flat_map(|part| match part {
-                Part::Hooks => self
-                    .hooks
-                    .iter()
-                    .map(|h| (h.name(), h.describe()))
-                    .collect(),
-                _ => vec![(part.name(), self.describe_part(part))],
-            })
+            .flat_map(|part| self.describe_part(part))
             .collect()
     }
 
-    /// What `part` does here; the hooks describe themselves.
-    fn describe_part(&self, part: Part) -> String {
+    /// What `part` does here, under its name; the hooks, each under its own, describe
+    /// themselves.
+    fn describe_part(&self, part: Part) -> Vec<(&'static str, String)> {
         let p = &self.params;
         let settings = &p.pressure;
         let dfsph = settings.solver == PressureSolverKind::Dfsph;
@@ -715,7 +709,14 @@ impl SphSolver {
         } else {
             String::new()
         };
-        match part {
+        let text = match part {
+            Part::Hooks => {
+                return self
+                    .hooks
+                    .iter()
+                    .map(|h| (h.name(), h.describe()))
+                    .collect()
+            }
             Part::Divergence => format!(
                 "DFSPH divergence solve{}, tolerance {} ({} to {} iterations)",
                 signed,
@@ -723,7 +724,6 @@ impl SphSolver {
                 settings.divergence_min_iterations(),
                 settings.max_iterations,
             ),
-            Part::Hooks => "the refinement's step hooks".into(),
             Part::Forces => {
                 let v = &p.viscosity;
                 let mut forces = format!("gravity {:?}", p.gravity.as_slice());
@@ -768,7 +768,8 @@ impl SphSolver {
                 "{}; inflow buffers move at their velocity through the solves",
                 self.open.describe()
             ),
-        }
+        };
+        vec![(part.name(), text)]
     }
 
     /// The parts the last [`Self::advance`] ran, in order.

@@ -20,7 +20,7 @@ fn scene_from(text: &str) -> Scene {
 /// The largest |ln(E / E_exact)| of a Taylor–Green run (see `TaylorGreen::energy_error`).
 fn tg_energy_error(
     n: usize,
-    advection: &str,
+    advection: Advection,
     nu: Real,
     cfl: Real,
     reflection: bool,
@@ -54,11 +54,11 @@ fn taylor_green_decay_and_convergence_order() {
     let err = |n, adv| tg_energy_error(n, adv, 0.1, 0.5, true, t_end);
     let mc: Vec<Real> = [32, 64, 128]
         .iter()
-        .map(|&n| err(n, "maccormack"))
+        .map(|&n| err(n, Advection::MACCORMACK))
         .collect();
     let sl: Vec<Real> = [64, 128]
         .iter()
-        .map(|&n| err(n, "semi_lagrangian"))
+        .map(|&n| err(n, Advection::SEMI_LAGRANGIAN))
         .collect();
     println!("MacCormack: {mc:?}, semi-Lagrangian (64, 128): {sl:?}");
     assert!(mc[1] < 0.01, "energy error at 64^2 is {:.3e}", mc[1]);
@@ -76,8 +76,8 @@ fn taylor_green_decay_and_convergence_order() {
 /// removes most of that loss (inviscid Taylor–Green, 64^2, MacCormack, CFL 0.5, t = 2.5 s).
 #[test]
 fn advection_reflection_keeps_energy() {
-    let plain = tg_energy_error(64, "maccormack", 0.0, 0.5, false, 2.5);
-    let reflected = tg_energy_error(64, "maccormack", 0.0, 0.5, true, 2.5);
+    let plain = tg_energy_error(64, Advection::MACCORMACK, 0.0, 0.5, false, 2.5);
+    let reflected = tg_energy_error(64, Advection::MACCORMACK, 0.0, 0.5, true, 2.5);
     println!("energy lost: plain {plain:.3e}, reflected {reflected:.3e}");
     assert!(reflected < 0.1 * plain);
 }
@@ -321,8 +321,8 @@ fn rotating_blob_returns_with_maccormack_more_accurate() {
         ((&f - &blob).mapv(|d| d * d).sum() / blob.mapv(|b| b * b).sum()).sqrt()
     };
     let (sl, mc) = (
-        error(Advection::SemiLagrangian),
-        error(Advection::Maccormack),
+        error(Advection::SEMI_LAGRANGIAN),
+        error(Advection::MACCORMACK),
     );
     println!("relative L2 error after one turn: semi-Lagrangian {sl:.3}, MacCormack {mc:.3}");
     assert!(mc < 0.5 * sl, "MacCormack {mc} vs semi-Lagrangian {sl}");

@@ -69,8 +69,8 @@ fn the_memory_estimate_bounds_what_a_refinement_holds() {
             "output.metrics=[]".into(),
         ];
         let scene = eddy::scene::load(&path, &overrides).expect("the scene");
-        let bodies = eddy::scene::build::bodies(&scene).expect("bodies");
-        let estimate = Footprint::of(&scene, &bodies).bytes;
+        let spec = eddy::scene::build::run_spec(&scene).expect("the run");
+        let estimate = Footprint::of(&spec).bytes;
         let before = HELD.load(Relaxed);
         let mut p = Pipeline::build(&scene).expect("builds");
         for _ in 0..3 {

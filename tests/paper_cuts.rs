@@ -566,8 +566,8 @@ fn the_memory_estimate_bounds_the_sph_set_up() {
         if scene.fluid.is_none() {
             continue;
         }
-        let bodies = eddy::scene::build::bodies(&scene).expect("bodies");
-        let estimate = eddy::pipeline::Footprint::of(&scene, &bodies).bytes;
+        let spec = eddy::scene::build::run_spec(&scene).expect("the run");
+        let estimate = eddy::pipeline::Footprint::of(&spec).bytes;
         let p = Pipeline::build(&scene).expect("builds");
         let used = p.sim.sph.as_ref().expect("a fluid").memory_bytes() as f64;
         assert!(

@@ -371,6 +371,49 @@ const BANNED: [(&str, &[&str]); 7] = [
 /// step hooks"); any other `crate::sph` path in `refine` is a crossing.
 const REFINE_REACHES: [&str; 2] = ["crate::sph::operators", "crate::sph::hooks"];
 
+/// What a `crate::scene` path in the pipeline may not reach, but in its front door
+/// (`entry.rs`): the pipeline builds from the `RunSpec` that `scene::build` hands over, so it
+/// names no `Scene`, and neither builds nor loads one (the scene's parameter types, such as
+/// `Coupling`, it may name).
+const PIPELINE_FRONT_DOOR: &str = "entry.rs";
+const PIPELINE_MAY_NOT_REACH: [&str; 3] = ["Scene", "build", "load"];
+
+/// Every `crate::scene` path in the pipeline's code outside its front door that reaches what
+/// [`PIPELINE_MAY_NOT_REACH`] names: the text from the path to the end of its statement, so a
+/// `use` over several lines is read whole.
+fn pipeline_reaches_into_the_scene() -> Vec<String> {
+    let mut files: Vec<(String, String)> = Vec::new();
+    for (at, line) in code_lines("pipeline") {
+        let file = at
+            .rsplit_once(':')
+            .map_or(at.clone(), |(f, _)| f.to_owned());
+        match files.last_mut() {
+            Some((f, text)) if *f == file => {
+                text.push_str(&line);
+                text.push('\n');
+            }
+            _ => files.push((file, format!("{line}\n"))),
+        }
+    }
+    let mut found = Vec::new();
+    for (file, text) in files
+        .iter()
+        .filter(|(f, _)| !f.ends_with(PIPELINE_FRONT_DOOR))
+    {
+        for (k, _) in text.match_indices("crate::scene") {
+            let statement = text[k..].split(';').next().unwrap_or("");
+            let words = statement.split(|c: char| !(c.is_alphanumeric() || c == '_'));
+            if words
+                .into_iter()
+                .any(|w| PIPELINE_MAY_NOT_REACH.contains(&w))
+            {
+                found.push(format!("{file}: {}", statement.trim()));
+            }
+        }
+    }
+    found
+}
+
 /// Every line of code (not comment) in the source folder `folder`, with its file and number.
 fn code_lines(folder: &str) -> Vec<(String, String)> {
     let mut lines = Vec::new();
@@ -417,6 +460,7 @@ fn no_import_crosses_the_layers() {
             ));
         }
     }
+    crossings.extend(pipeline_reaches_into_the_scene());
     assert!(crossings.is_empty(), "{}", crossings.join("\n"));
 }
 

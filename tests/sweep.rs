@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use eddy::bench::grid::TaylorGreen;
+use eddy::grid::Advection;
 
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/dam_break.toml");
 const TAYLOR_GREEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/taylor_green.toml");
@@ -221,7 +222,7 @@ fn a_taylor_green_study_measures_the_grid_tests_error_and_its_order() {
     let err = numbers(&rows, "error_taylor_green");
     let direct = TaylorGreen {
         cells: 64,
-        advection: "maccormack",
+        advection: Advection::MACCORMACK,
         reflection: true,
         nu: 0.1,
         cfl: 0.5,

@@ -190,7 +190,7 @@ fn d_cfl() -> Real {
     1.0
 }
 fn d_advection() -> Advection {
-    Advection::SemiLagrangian
+    Advection::SEMI_LAGRANGIAN
 }
 fn d_tolerance() -> Real {
     1e-3

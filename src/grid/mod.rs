@@ -30,6 +30,7 @@ pub mod viscosity;
 pub mod vortex_coupling;
 pub mod walls;
 
+pub use advect::Advection;
 pub use average::RunningAverage;
 pub use boundary::Boundaries;
 pub use diffusion::{solve_diffusion, DiffusionBoundary, DiffusionSide, DiffusionSystem};
@@ -38,8 +39,8 @@ pub use interp::Stagger;
 pub use liquid::Liquid;
 pub use mac::MacGrid;
 pub use params::{
-    Advection, GridBoundary, GridParams, GridSide, InflowProfile, ObstacleSurface, ProfileShape,
-    Smoke, SmokeSource, ViscosityScheme,
+    GridBoundary, GridParams, GridSide, InflowProfile, ObstacleSurface, ProfileShape, Smoke,
+    SmokeSource, ViscosityScheme,
 };
 pub use poisson::{
     Boundary, CellKind, PoissonSystem, Side, SolveError, SolveStats, SolverSettings,

@@ -6,6 +6,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::advect::Advection;
 use super::poisson::SolverSettings;
 use crate::geometry::{Motion, Shape};
 use crate::stepping::StepLimits;
@@ -78,17 +79,6 @@ pub enum ObstacleSurface {
     /// from 5.4 % to 4.2 % (translation) and from 4.0 % to 1.3 % (rotation) of one at 64 cells.
     #[default]
     Cut,
-}
-
-/// Advection scheme of velocity and scalars.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum Advection {
-    /// Semi-Lagrangian, trilinear, second-order (midpoint) backtrace.
-    SemiLagrangian,
-    /// MacCormack (Selle et al. 2008), clamped to the backtrace stencil's range.
-    #[default]
-    Maccormack,
 }
 
 /// Time discretisation of the implicit viscosity.

@@ -8,12 +8,12 @@ use std::borrow::Cow;
 
 use ndarray::{s, Array3, Zip};
 
-use super::advect::advect;
+use super::advect::{advect, Advection};
 use super::boundary::{cells_near, Boundaries};
 use super::fine::FineGrid;
 use super::forces::buoyancy;
 use super::mac::MacGrid;
-use super::params::{Advection, Smoke, SmokeSource};
+use super::params::{Smoke, SmokeSource};
 use super::solver::GridError;
 use crate::geometry::{Body, RigidBody};
 use crate::{Point3, Real, Vec3};

@@ -12,7 +12,7 @@ use super::boundary::Boundaries;
 use super::diffusion::DiffusionSystem;
 use super::forces::{add_cell_acceleration, confinement};
 use super::mac::MacGrid;
-use super::params::{Advection, GridParams, ViscosityScheme};
+use super::params::{GridParams, ViscosityScheme};
 use super::poisson::{CellKind, FaceFractions, PoissonSystem, SolveError};
 use super::project::{max_divergence, project, subtract_gradient};
 use super::smoke::SmokeState;
@@ -533,10 +533,7 @@ impl GridSolver {
     /// What `part` does here.
     fn describe_part(&self, part: Part) -> String {
         let p = &self.params;
-        let scheme = match p.advection {
-            Advection::SemiLagrangian => "semi-Lagrangian",
-            Advection::Maccormack => "MacCormack",
-        };
+        let scheme = p.advection.label();
         match part {
             Part::Obstacles => {
                 let moving = self.bodies.iter().filter(|b| b.is_moving()).count();

@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use super::build::Pipeline;
 use super::outputs::CHECKPOINT_FILE;
 use crate::io::{kept_rows, read_checkpoint, AttrValue, IoError, KeptRows};
-use crate::scene::Scene;
 use crate::state::{Persist, State, StateError};
 
 /// The exit status of a run stopped by SIGINT or SIGTERM once its checkpoint is written
@@ -38,16 +37,6 @@ pub enum CheckpointError {
         path.display()
     )]
     OtherScene { path: PathBuf, difference: String },
-}
-
-/// The scene as a checkpoint compares it: without what a resumed run may change (when it
-/// ends, what it writes).
-pub(super) fn comparable(scene: &Scene) -> String {
-    let mut s = scene.clone();
-    s.time.end = None;
-    s.time.steps = None;
-    s.output = Default::default();
-    s.to_toml()
 }
 
 /// The first line where two comparable scenes differ, for the refusal.
@@ -180,18 +169,18 @@ fn stage_section(i: usize, name: &str) -> String {
     format!("stages/{i}_{name}")
 }
 
-/// The checkpoint in `out`, read and checked against `scene`.
-pub(super) fn load(out: &Path, scene: &Scene) -> Result<State, super::RunError> {
+/// The checkpoint in `out`, read and checked against the run's scene as a checkpoint records
+/// it (`RunSpec::checkpoint_key`).
+pub(super) fn load(out: &Path, ours: &str) -> Result<State, super::RunError> {
     let path = out.join(CHECKPOINT_FILE);
     if !path.exists() {
         return Err(CheckpointError::Missing(out.to_path_buf()).into());
     }
     let stored = read_checkpoint(&path)?;
-    let ours = comparable(scene);
     let theirs = stored.text("scene").unwrap_or_default();
     if ours != theirs {
         return Err(CheckpointError::OtherScene {
-            difference: difference(&ours, theirs),
+            difference: difference(ours, theirs),
             path,
         }
         .into());

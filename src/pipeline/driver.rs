@@ -13,29 +13,21 @@ use super::checkpoint::{self, CheckpointError};
 use super::outputs::{remove_earlier_outputs, Outputs, CHECKPOINT_FILE, SCENE_FILE};
 use super::plan::Plan;
 use super::simulation::StepError;
+use super::spec::{RunEnd, RunSpec};
 use super::stages::StepRecord;
-use super::{output_dir, RunError, RunOptions, RunSummary};
+use super::{RunError, RunOptions, RunSummary};
 use crate::io::{write_atomic, write_checkpoint, CsvSeries, IoError};
-use crate::scene::Scene;
 use crate::stepping::towards_end;
 use crate::Real;
 
 /// Times closer than this count as equal (frame times, the end time).
 const TIME_EPS: Real = 1e-12;
 
-/// When a run ends.
-struct End {
-    time: Option<Real>,
-    steps: Option<u64>,
-    /// Relative change per unit time of the grid velocity below which it is steady.
-    steady: Option<Real>,
-}
-
-/// Runs an already resolved scene into its output folder (from its checkpoint with
-/// [`RunOptions::resume`]). A stop asked for through [`RunOptions::stop`] writes a checkpoint
-/// after the step in progress and ends the run with [`RunError::Interrupted`].
-pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let mut run = Run::begin(scene, options)?;
+/// Runs `spec` into its output folder (from its checkpoint with [`RunOptions::resume`]). A
+/// stop asked for through [`RunOptions::stop`] writes a checkpoint after the step in progress
+/// and ends the run with [`RunError::Interrupted`].
+pub fn drive(spec: &RunSpec, options: &RunOptions) -> Result<RunSummary, RunError> {
+    let mut run = Run::begin_from(spec, options)?;
     if run.removed_outputs() > 0 {
         tracing::warn!(
             "removed {} output files of an earlier run from {}",
@@ -75,7 +67,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<RunSummary, RunE
 pub struct Run {
     pub pipeline: Pipeline,
     out: PathBuf,
-    end: End,
+    end: RunEnd,
     /// The next frame's index: frame k is at k times the interval (a product, so the times do
     /// not drift).
     frame: u64,
@@ -84,7 +76,7 @@ pub struct Run {
     ended: bool,
     plan: Plan,
     started: Instant,
-    /// The scene as checkpoints record it (see `checkpoint::comparable`).
+    /// The scene as checkpoints record it (see [`RunSpec::checkpoint_key`]).
     scene_key: String,
     checkpoints: Schedule,
     /// Files of an earlier run that starting this one removed from the output folder.
@@ -132,63 +124,61 @@ impl Schedule {
 
 impl Run {
     /// Prepares the output folder (earlier outputs removed, the resolved `scene.toml`), builds
-    /// the pipeline and opens its outputs.
-    pub fn start(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+    /// the pipeline of `spec` (as [`RunOptions::spec`] resolves it) and opens its outputs.
+    pub fn start_from(spec: &RunSpec, options: &RunOptions) -> Result<Self, RunError> {
         let started = Instant::now();
-        options.check()?;
-        let scene = &options.apply(scene);
-        let out = output_dir(scene, options);
+        let out = spec.output_dir(options);
         std::fs::create_dir_all(&out).map_err(|e| IoError::Io {
             path: out.clone(),
             action: "creating the output folder",
             source: e,
         })?;
         let removed = remove_earlier_outputs(&out)?;
-        let resolved = scene.to_toml();
-        write_atomic(&out.join(SCENE_FILE), |w| w.write_all(resolved.as_bytes()))?;
+        write_atomic(&out.join(SCENE_FILE), |w| {
+            w.write_all(spec.resolved.as_bytes())
+        })?;
         // A scene that cannot be built (no fluid cell, a stored flow on another grid) has
         // written no frame: its error says what is wrong and nothing about frames.
-        let mut pipeline = Pipeline::build(scene)?;
+        let mut pipeline = Pipeline::from_spec(spec)?;
         pipeline.open(&out)?;
-        let mut run = Run::assemble(pipeline, scene, out, 0, started);
+        let mut run = Run::assemble(pipeline, spec, out, 0, started);
         run.removed_outputs = removed;
         Ok(run)
     }
 
-    /// [`Run::resume`] with [`RunOptions::resume`], else [`Run::start`].
-    pub fn begin(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+    /// [`Run::resume_from`] with [`RunOptions::resume`], else [`Run::start_from`].
+    pub fn begin_from(spec: &RunSpec, options: &RunOptions) -> Result<Self, RunError> {
         if options.resume {
-            Run::resume(scene, options)
+            Run::resume_from(spec, options)
         } else {
-            Run::start(scene, options)
+            Run::start_from(spec, options)
         }
     }
 
-    /// Goes on from the checkpoint in the scene's output folder: the pipeline built from the
+    /// Goes on from the checkpoint in the run's output folder: the pipeline built from the
     /// same scene (only `time.end`, `time.steps` and the output keys may differ) takes back
     /// the saved state; frames, series and statistics go on from it, no row written twice.
-    pub fn resume(scene: &Scene, options: &RunOptions) -> Result<Self, RunError> {
+    pub fn resume_from(spec: &RunSpec, options: &RunOptions) -> Result<Self, RunError> {
         let started = Instant::now();
-        options.check()?;
-        let scene = &options.apply(scene);
-        let out = output_dir(scene, options);
-        let state = checkpoint::load(&out, scene)?;
+        let out = spec.output_dir(options);
+        let state = checkpoint::load(&out, &spec.checkpoint_key)?;
         let invalid = |source| CheckpointError::State {
             path: out.join(CHECKPOINT_FILE),
             source,
         };
         let frame = state.read("run").u64("frame").map_err(invalid)?;
-        let mut pipeline = Pipeline::build(scene)?;
+        let mut pipeline = Pipeline::from_spec(spec)?;
         pipeline.open_to_resume(&out, &state)?;
         pipeline.restore_state(&state).map_err(invalid)?;
-        let resolved = scene.to_toml();
-        write_atomic(&out.join(SCENE_FILE), |w| w.write_all(resolved.as_bytes()))?;
-        Ok(Run::assemble(pipeline, scene, out, frame, started))
+        write_atomic(&out.join(SCENE_FILE), |w| {
+            w.write_all(spec.resolved.as_bytes())
+        })?;
+        Ok(Run::assemble(pipeline, spec, out, frame, started))
     }
 
     fn assemble(
         pipeline: Pipeline,
-        scene: &Scene,
+        spec: &RunSpec,
         out: PathBuf,
         frame: u64,
         started: Instant,
@@ -198,17 +188,13 @@ impl Run {
         Run {
             pipeline,
             out,
-            end: End {
-                time: scene.time.end,
-                steps: scene.time.steps,
-                steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
-            },
+            end: spec.end,
             frame,
             steady: false,
             ended: false,
             plan,
             started,
-            scene_key: checkpoint::comparable(scene),
+            scene_key: spec.checkpoint_key.clone(),
             checkpoints,
             removed_outputs: 0,
         }

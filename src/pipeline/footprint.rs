@@ -1,12 +1,11 @@
-//! What a scene will allocate, estimated from the scene alone before anything is built, so that
-//! a run too large for the machine is refused with the numbers instead of swapping or hanging
-//! (a `fluid.spacing` of 1e-5 m asks for 10^14 particles).
+//! What a run will allocate, estimated from its specification alone before anything is built,
+//! so that a run too large for the machine is refused with the numbers instead of swapping or
+//! hanging (a `fluid.spacing` of 1e-5 m asks for 10^14 particles).
 
 use std::fmt;
 
-use crate::geometry::RigidBody;
+use super::spec::RunSpec;
 use crate::metrics::statistics;
-use crate::scene::{build, Scene};
 use crate::Real;
 
 /// Bytes per fluid particle: state, neighbour lists and the pair cache of ~50 neighbours
@@ -34,12 +33,13 @@ pub struct Footprint {
 }
 
 impl Footprint {
-    /// The footprint of `scene` with its `bodies`.
-    pub fn of(scene: &Scene, bodies: &[RigidBody]) -> Self {
+    /// The footprint of the run `spec`.
+    pub fn of(spec: &RunSpec) -> Self {
         let (mut particles, mut samples) = (0.0, 0.0);
-        if let Some(fluid) = &scene.fluid {
-            let h = fluid.spacing;
-            particles = fluid
+        if let Some(sph) = &spec.sph {
+            let h = sph.params.spacing;
+            particles = sph
+                .params
                 .blocks
                 .iter()
                 .map(|b| {
@@ -48,7 +48,8 @@ impl Footprint {
                         .product::<Real>()
                 })
                 .sum();
-            samples = bodies
+            samples = spec
+                .bodies
                 .iter()
                 .map(|b| {
                     let (lo, hi) = b.local_aabb();
@@ -57,27 +58,28 @@ impl Footprint {
                 })
                 .sum();
         }
-        let cells = scene
-            .grid
-            .as_ref()
-            .map_or(0.0, |g| g.resolution.iter().map(|&n| n as f64).product());
+        let cells = spec.grid.as_ref().map_or(0.0, |g| {
+            g.params.resolution.iter().map(|&n| n as f64).product()
+        });
         // The running statistics: the grid's cells, and a particle fluid's bins.
-        let statistics = build::statistics_spec(scene).map_or(0.0, |spec| {
-            let (lo, hi) = spec.domain;
-            let bins = scene.fluid.as_ref().map_or(0.0, |_| {
+        let statistics = spec.statistics.as_ref().map_or(0.0, |stats| {
+            let (lo, hi) = stats.domain;
+            let bins = spec.sph.as_ref().map_or(0.0, |_| {
                 (0..3)
-                    .map(|a| ((hi[a] - lo[a]) / spec.bin).ceil().max(1.0))
+                    .map(|a| ((hi[a] - lo[a]) / stats.bin).ceil().max(1.0))
                     .product::<Real>()
             });
             cells * statistics::BYTES_PER_CELL as f64 + bins * statistics::BYTES_PER_BIN as f64
         });
-        let refinement = if scene.refinement.is_none() {
-            0.0
-        } else {
-            // The hook's own arrays, and the operators' volumes the solver keeps for any hook.
-            let per_particle =
-                scene.refinement.bytes_per_particle() + std::mem::size_of::<Real>() as u64;
-            particles * per_particle as f64 + REFINEMENT_FIXED as f64
+        let refinement = match &spec.sph {
+            Some(sph) if !sph.refinement.is_none() => {
+                // The hook's own arrays, and the operators' volumes the solver keeps for any
+                // hook.
+                let per_particle =
+                    sph.refinement.bytes_per_particle() + std::mem::size_of::<Real>() as u64;
+                particles * per_particle as f64 + REFINEMENT_FIXED as f64
+            }
+            _ => 0.0,
         };
         let bytes = particles * BYTES_PER_PARTICLE as f64
             + refinement

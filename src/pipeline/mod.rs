@@ -1,7 +1,8 @@
-//! The one simulation pipeline: a resolved scene becomes a [`Simulation`] (its solvers on one
-//! clock) and a list of [`Stage`]s that run in order each step; one driver loop steps every
-//! scene to its end, writing metrics, probes and frames. `eddy run --plan` prints the
-//! [`Plan`] read from the same stage objects, and a run can record the stages it ran (the
+//! The one simulation pipeline: a resolved scene, handed over as a [`RunSpec`] (no part of the
+//! pipeline but its front door, `entry.rs`, names a scene), becomes a [`Simulation`] (its
+//! solvers on one clock) and a list of [`Stage`]s that run in order each step; one driver loop
+//! steps every run to its end, writing metrics, probes and frames. `eddy run --plan` prints
+//! the [`Plan`] read from the same stage objects, and a run can record the stages it ran (the
 //! stage trace), so plan and execution cannot drift.
 //!
 //! Each step the driver asks every solver for its largest stable step, takes the smallest,
@@ -11,27 +12,31 @@ mod build;
 mod checkpoint;
 mod coupling;
 mod driver;
+mod entry;
 mod footprint;
 mod order;
 pub mod outputs;
 mod plan;
 mod simulation;
+mod spec;
 mod stages;
 mod statistics;
 mod turbulence;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-pub use build::{grid_solver, sph_solver, Pipeline};
+pub use build::Pipeline;
 pub use checkpoint::{CheckpointError, INTERRUPTED_EXIT};
 pub use coupling::{Exchange, DRAG_HEIGHT};
-pub use driver::{run_scene, Progress, Run};
+pub use driver::{drive, Progress, Run};
+pub use entry::{grid_solver, output_dir, resolve, run, run_scene, sph_solver};
 pub use footprint::{available_memory, Footprint};
-pub use order::SceneKind;
+pub use order::{register_stage, stage_kinds, Built, SceneKind, Slot, StageKind};
 pub use outputs::{Kind, Output, OutputSpec, Outputs};
 pub use plan::{Plan, PlannedStage};
 pub use simulation::{Simulation, StepError};
-pub use stages::{Stage, StepRecord};
+pub use spec::{GridSpec, RunEnd, RunSpec, SphSpec};
+pub use stages::{AddedColumns, Stage, StepRecord};
 pub use statistics::{MediumStatistics, StatisticsSpec};
 pub use turbulence::{
     fit_to_liquid, GridTurbulence, SphTurbulence, Surface, Turbulence, TurbulenceStats, ABL_FIELD,
@@ -42,7 +47,7 @@ use crate::abl::AblError;
 use crate::geometry::GeometryError;
 use crate::grid::GridError;
 use crate::io::IoError;
-use crate::scene::{self, Scene, SceneError};
+use crate::scene::SceneError;
 use crate::sph::Instability;
 use crate::Real;
 
@@ -169,35 +174,4 @@ impl RunOptions {
         }
         Ok(())
     }
-
-    /// `scene` with `until` and `steps` folded into its `[time]` (each the earlier of the two
-    /// ends), so the resolved scene written beside a run's outputs reproduces the run.
-    pub fn apply(&self, scene: &Scene) -> Scene {
-        let mut scene = scene.clone();
-        let t = &mut scene.time;
-        t.end = [t.end, self.until].into_iter().flatten().reduce(Real::min);
-        t.steps = [t.steps, self.steps].into_iter().flatten().min();
-        scene
-    }
-}
-
-/// Loads `path` with the options' overrides, ready to run; checks the options too.
-pub fn resolve(path: &Path, options: &RunOptions) -> Result<Scene, RunError> {
-    options.check()?;
-    Ok(scene::load(path, &options.overrides)?)
-}
-
-/// The output folder of a scene under these options.
-pub fn output_dir(scene: &Scene, options: &RunOptions) -> PathBuf {
-    options
-        .out
-        .clone()
-        .or_else(|| scene.output.dir.clone())
-        .unwrap_or_else(|| Path::new("out").join(&scene.name))
-}
-
-/// Runs the scene at `path`.
-pub fn run(path: &Path, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let scene = resolve(path, options)?;
-    run_scene(&scene, options)
 }

@@ -1,24 +1,25 @@
-//! The order of a step's stages, one function per kind of scene. [`stages`] builds the stages
-//! a scene needs (each is `None` when nothing asks for it) and hands them to the ordering of
-//! its kind; a stage that is not built does not run, and `--plan` prints the list as ordered
-//! here. A new stage is its own file plus one line in the ordering functions that run it; the
-//! metrics columns it adds reach its solver's metrics stage from here ([`Stage::adopt_columns`]).
+//! The stages of a step and their order. Every kind of stage is one entry of [`BUILT_IN`] (or a
+//! [`register_stage`] call from outside the crate): it builds its stage from the run's
+//! [`RunSpec`] when the run needs it, and names the [`Slot`] of the step it runs in. Each kind
+//! of scene places the slots around its solvers' own stages (one function per kind); within a
+//! slot, stages run in the order of [`stage_kinds`]. A stage that is not built does not run,
+//! and `--plan` prints the list as ordered here. The metrics columns a stage adds reach its
+//! solver's metrics stage from here ([`Stage::adopt_columns`]).
+
+use std::sync::RwLock;
 
 use super::coupling::{SurfaceExchange, SurfacePressure};
-use super::outputs::{Kind, METRICS_FILE, PROBES_FILE};
 use super::simulation::Simulation;
+use super::spec::RunSpec;
 use super::stages::{
     GridMetrics, GridProbes, GridStep, SphMetrics, SphNeighbours, SphProbes, SphStep, Stage,
-    TaylorGreenDecay,
 };
 use super::statistics::StatisticsStage;
 use super::turbulence::{GridTurbulence, SphTurbulence};
 use super::RunError;
-use crate::metrics::{Metric, Probe};
-use crate::scene::{build, Coupling, InitialFlow, Scene};
-use crate::Vec3;
 
-type Built = Option<Box<dyn Stage>>;
+/// What building a stage gives: the stage, or `None` when the run does not need it.
+pub type Built = Result<Option<Box<dyn Stage>>, RunError>;
 
 /// The kinds of scene, each with its own order of stages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,35 +34,151 @@ pub enum SceneKind {
     Coupled,
 }
 
-/// The stages one scene needs, before they are ordered.
-struct StageSet {
-    sph_probes: Built,
-    grid_probes: Built,
-    /// Pfaff et al. Figure 9, lines 1–25, on the grid's cells.
-    grid_turbulence: Built,
-    /// The same lines on the particles.
-    sph_turbulence: Built,
-    /// The running statistics of every medium, after the solvers' step.
-    statistics: Built,
-    sph_metrics: Built,
-    grid_metrics: Built,
+/// Where in a step a stage runs, around the solvers' own stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    /// First, reading the state the step starts from (the probes).
+    Start,
+    /// Just before the grid's step (its boundary-layer turbulence, Pfaff et al. Figure 9,
+    /// lines 1–25).
+    BeforeGrid,
+    /// Just before the particles' step (the same lines on the particles).
+    BeforeSph,
+    /// After every solver has stepped and the particles' neighbourhood is rebuilt (the
+    /// running statistics).
+    AfterStep,
+    /// Last: each solver's metrics row, with the columns the stages before it added.
+    Metrics,
 }
 
-/// The kind of `scene` and its stages, in the order a step runs them.
+const SLOTS: usize = 5;
+
+/// A kind of stage: how a run builds it and where in the step it runs.
+pub struct StageKind {
+    /// Its name, as the scene's `stages` asks for a registered one.
+    pub name: &'static str,
+    /// One line on what it does.
+    pub summary: &'static str,
+    pub slot: Slot,
+    /// The stage, when the run needs it (a registered stage reads [`RunSpec::stages`]).
+    pub build: fn(&RunSpec, &mut Simulation) -> Built,
+}
+
+/// The stages eddy ships, in their order within a slot.
+pub static BUILT_IN: [StageKind; 7] = [
+    StageKind {
+        name: "sph_probes",
+        summary: "the probes of the fluid, at the start of each step",
+        slot: Slot::Start,
+        build: SphProbes::stage,
+    },
+    StageKind {
+        name: "grid_probes",
+        summary: "the point and body probes of the grid, at the start of each step",
+        slot: Slot::Start,
+        build: GridProbes::stage,
+    },
+    StageKind {
+        name: "grid_turbulence",
+        summary: "Pfaff et al. Figure 9, lines 1-25, on the grid's cells",
+        slot: Slot::BeforeGrid,
+        build: GridTurbulence::stage,
+    },
+    StageKind {
+        name: "sph_turbulence",
+        summary: "Pfaff et al. Figure 9, lines 1-25, on the particles",
+        slot: Slot::BeforeSph,
+        build: SphTurbulence::stage,
+    },
+    StageKind {
+        name: "statistics",
+        summary: "the running statistics of every medium",
+        slot: Slot::AfterStep,
+        build: StatisticsStage::stage,
+    },
+    StageKind {
+        name: "sph_metrics",
+        summary: "the fluid's metrics.csv row",
+        slot: Slot::Metrics,
+        build: SphMetrics::stage,
+    },
+    StageKind {
+        name: "grid_metrics",
+        summary: "the grid's metrics.csv row",
+        slot: Slot::Metrics,
+        build: GridMetrics::stage,
+    },
+];
+
+/// Kinds added by [`register_stage`].
+static REGISTERED: RwLock<Vec<&'static StageKind>> = RwLock::new(Vec::new());
+
+/// Adds a kind of stage from outside the crate: a run builds it when its `build` says so
+/// (typically when the scene's `stages` names it). Refuses a name that is taken.
+pub fn register_stage(kind: StageKind) -> Result<(), String> {
+    let mut registered = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
+    let mut all = BUILT_IN.iter().chain(registered.iter().copied());
+    if all.any(|k| k.name == kind.name) {
+        return Err(format!("a stage named `{}` exists", kind.name));
+    }
+    registered.push(Box::leak(Box::new(kind)));
+    Ok(())
+}
+
+/// Every kind of stage: the built-in ones, then the registered ones.
+pub fn stage_kinds() -> Vec<&'static StageKind> {
+    let registered = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    BUILT_IN.iter().chain(registered.iter().copied()).collect()
+}
+
+/// One place in a kind of scene's order: a slot's stages, or one of the solvers' own.
+enum At {
+    Slot(Slot),
+    Own(Box<dyn Stage>),
+}
+
+fn own(stage: impl Stage + 'static) -> At {
+    At::Own(Box::new(stage))
+}
+
+/// The kind of run `spec` is and its stages, in the order a step runs them.
 pub fn stages(
-    scene: &Scene,
+    spec: &RunSpec,
     sim: &mut Simulation,
 ) -> Result<(SceneKind, Vec<Box<dyn Stage>>), RunError> {
+    let kinds = stage_kinds();
+    if let Some(unknown) = spec
+        .stages
+        .iter()
+        .find(|n| !kinds.iter().any(|k| k.name == n.as_str()))
+    {
+        let names: Vec<_> = kinds.iter().map(|k| k.name).collect();
+        return Err(RunError::Unsupported(format!(
+            "`stages`: unknown stage `{unknown}`, expected one of {}",
+            names.join(", ")
+        )));
+    }
+    let mut slots: [Vec<Box<dyn Stage>>; SLOTS] = Default::default();
+    for kind in kinds {
+        if let Some(stage) = (kind.build)(spec, sim)? {
+            slots[kind.slot as usize].push(stage);
+        }
+    }
     let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
-    let coupling = scene.coupling.clone().filter(|_| has_sph && has_grid);
-    let set = StageSet::build(scene, sim, coupling.is_some())?;
+    let coupling = spec.coupling.clone().filter(|_| has_sph && has_grid);
     let (kind, order) = match (coupling, has_sph, has_grid) {
-        (Some(coupling), _, _) => (SceneKind::Coupled, coupled(set, coupling)),
-        (None, true, true) => (SceneKind::SideBySide, side_by_side(set)),
-        (None, true, false) => (SceneKind::Sph, sph(set)),
-        (None, false, _) => (SceneKind::Grid, grid(set)),
+        (Some(coupling), _, _) => (SceneKind::Coupled, coupled(SurfaceExchange { coupling })),
+        (None, true, true) => (SceneKind::SideBySide, side_by_side()),
+        (None, true, false) => (SceneKind::Sph, sph()),
+        (None, false, _) => (SceneKind::Grid, grid()),
     };
-    let mut stages: Vec<Box<dyn Stage>> = order.into_iter().flatten().collect();
+    let mut stages = Vec::new();
+    for at in order {
+        match at {
+            At::Slot(slot) => stages.append(&mut slots[slot as usize]),
+            At::Own(stage) => stages.push(stage),
+        }
+    }
     let added: Vec<_> = stages.iter().filter_map(|s| s.added_columns(sim)).collect();
     for stage in &mut stages {
         stage.adopt_columns(&added);
@@ -70,159 +187,58 @@ pub fn stages(
 }
 
 /// A grid scene: Figure 9's turbulence (lines 1–25), then the grid's own step (line 28).
-fn grid(s: StageSet) -> Vec<Built> {
+fn grid() -> Vec<At> {
     vec![
-        s.grid_probes,
-        s.grid_turbulence,
-        Some(Box::new(GridStep)),
-        s.statistics,
-        s.grid_metrics,
+        At::Slot(Slot::Start),
+        At::Slot(Slot::BeforeGrid),
+        own(GridStep),
+        At::Slot(Slot::AfterStep),
+        At::Slot(Slot::Metrics),
     ]
 }
 
 /// An SPH scene: the turbulence on the particles, the solver's step (its refinements run
 /// inside, as step hooks), then the neighbourhood of the new positions.
-fn sph(s: StageSet) -> Vec<Built> {
+fn sph() -> Vec<At> {
     vec![
-        s.sph_probes,
-        s.sph_turbulence,
-        Some(Box::new(SphStep)),
-        Some(Box::new(SphNeighbours)),
-        s.statistics,
-        s.sph_metrics,
+        At::Slot(Slot::Start),
+        At::Slot(Slot::BeforeSph),
+        own(SphStep),
+        own(SphNeighbours),
+        At::Slot(Slot::AfterStep),
+        At::Slot(Slot::Metrics),
     ]
 }
 
 /// A fluid and a grid that do not exchange anything: each steps as in its own scene (the
 /// turbulence drives the grid).
-fn side_by_side(s: StageSet) -> Vec<Built> {
+fn side_by_side() -> Vec<At> {
     vec![
-        s.sph_probes,
-        s.grid_probes,
-        s.sph_turbulence,
-        Some(Box::new(SphStep)),
-        Some(Box::new(SphNeighbours)),
-        s.grid_turbulence,
-        Some(Box::new(GridStep)),
-        s.statistics,
-        s.sph_metrics,
-        s.grid_metrics,
+        At::Slot(Slot::Start),
+        At::Slot(Slot::BeforeSph),
+        own(SphStep),
+        own(SphNeighbours),
+        At::Slot(Slot::BeforeGrid),
+        own(GridStep),
+        At::Slot(Slot::AfterStep),
+        At::Slot(Slot::Metrics),
     ]
 }
 
 /// Air on the grid over water in SPH (`super::coupling`): the water is the air's boundary for
 /// the step, the air's pressure on it is known after the grid's projection, and both reach the
 /// particles before they move.
-fn coupled(s: StageSet, coupling: Coupling) -> Vec<Built> {
+fn coupled(exchange: SurfaceExchange) -> Vec<At> {
     vec![
-        s.sph_probes,
-        s.grid_probes,
-        Some(Box::new(SurfaceExchange { coupling })),
-        s.grid_turbulence,
-        Some(Box::new(GridStep)),
-        Some(Box::new(SurfacePressure)),
-        s.sph_turbulence,
-        Some(Box::new(SphStep)),
-        Some(Box::new(SphNeighbours)),
-        s.statistics,
-        s.sph_metrics,
-        s.grid_metrics,
+        At::Slot(Slot::Start),
+        own(exchange),
+        At::Slot(Slot::BeforeGrid),
+        own(GridStep),
+        own(SurfacePressure),
+        At::Slot(Slot::BeforeSph),
+        own(SphStep),
+        own(SphNeighbours),
+        At::Slot(Slot::AfterStep),
+        At::Slot(Slot::Metrics),
     ]
-}
-
-impl StageSet {
-    /// Builds what `scene` asks for. The grid's turbulence in a scene with a grid, the fluid's
-    /// in a scene with a fluid; a coupled scene has both, each seeded and synthesised in its
-    /// own medium (an uncoupled scene with both drives the grid).
-    fn build(scene: &Scene, sim: &mut Simulation, coupled: bool) -> Result<Self, RunError> {
-        let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
-        let both = has_sph && has_grid;
-        let (mut grid_turbulence, mut sph_turbulence): (Built, Built) = (None, None);
-        if let Some(settings) = build::abl_settings(scene) {
-            let shapes: Vec<_> = scene
-                .container
-                .iter()
-                .chain(&scene.obstacles)
-                .map(|b| b.shape.clone())
-                .collect();
-            if let Some(grid) = scene.grid.as_ref() {
-                grid_turbulence = Some(Box::new(GridTurbulence::build(
-                    settings.clone(),
-                    sim,
-                    &shapes,
-                    grid.advection,
-                )?));
-            }
-            if has_sph && (coupled || !has_grid) {
-                sph_turbulence = Some(Box::new(SphTurbulence::build(settings, sim, &shapes)?));
-            }
-        }
-        let probes = &scene.probes;
-        let per_step = |p: &&Probe| !matches!(p, Probe::Line { .. });
-        let sph_probes: Built = (has_sph && !probes.is_empty()).then(|| {
-            Box::new(SphProbes {
-                probes: probes.clone(),
-                file: Kind::Particles.file(PROBES_FILE, both),
-                recorder: None,
-            }) as Box<dyn Stage>
-        });
-        let grid_probes: Built = (has_grid && probes.iter().any(|p| per_step(&p))).then(|| {
-            let offset = usize::from(scene.container.is_some());
-            let bodies = scene
-                .obstacles
-                .iter()
-                .enumerate()
-                .filter_map(|(i, b)| b.name.clone().map(|n| (n, i + offset)))
-                .collect();
-            Box::new(GridProbes {
-                probes: probes.iter().filter(per_step).cloned().collect(),
-                bodies,
-                file: Kind::Grid.file(PROBES_FILE, both),
-                recorder: None,
-            }) as Box<dyn Stage>
-        });
-        let asked = scene.output.metrics.as_deref();
-        let sph_chosen = Metric::chosen(asked, &Metric::SPH);
-        let sph_metrics: Built = (has_sph && !sph_chosen.is_empty()).then(|| {
-            Box::new(SphMetrics {
-                metrics: sph_chosen,
-                gravity: Vec3::from(scene.gravity),
-                file: Kind::Particles.file(METRICS_FILE, both),
-                recorder: None,
-                added: Vec::new(),
-            }) as Box<dyn Stage>
-        });
-        let grid_chosen = Metric::chosen(asked, &Metric::GRID);
-        let grid_metrics: Built = (has_grid && !grid_chosen.is_empty()).then(|| {
-            let taylor_green = scene
-                .grid
-                .as_ref()
-                .is_some_and(|g| g.initial_flow == Some(InitialFlow::TaylorGreen))
-                .then_some(TaylorGreenDecay {
-                    nu: scene.viscosity.kinematic,
-                    initial_energy: 0.0,
-                });
-            Box::new(GridMetrics {
-                metrics: grid_chosen,
-                file: Kind::Grid.file(METRICS_FILE, both),
-                csv: None,
-                taylor_green,
-                added: Vec::new(),
-            }) as Box<dyn Stage>
-        });
-        let statistics: Built = build::statistics_spec(scene)
-            .map(|spec| {
-                Ok::<_, RunError>(Box::new(StatisticsStage::build(spec, sim)?) as Box<dyn Stage>)
-            })
-            .transpose()?;
-        Ok(Self {
-            statistics,
-            sph_probes,
-            grid_probes,
-            grid_turbulence,
-            sph_turbulence,
-            sph_metrics,
-            grid_metrics,
-        })
-    }
 }

@@ -1,16 +1,20 @@
-//! The stages a step runs, in order: each is an object built from the scene only when the
-//! scene needs it, and the plan is printed from the same objects (see `super::plan`).
+//! The stages a step runs, in order: each is an object built from the run's specification only
+//! when the run needs it (see `super::order`), and the plan is printed from the same objects
+//! (see `super::plan`).
 
 use std::path::Path;
 
-use super::outputs::Kind;
+use super::order::Built;
+use super::outputs::{Kind, METRICS_FILE, PROBES_FILE};
 use super::simulation::{Simulation, StepError};
+use super::spec::RunSpec;
 use crate::grid::GridStepStats;
 use crate::io::{CsvSeries, IoError};
 use crate::metrics::series::StateMetrics;
 use crate::metrics::{
     grid_vorticity_stats, GridProbeRecorder, Metric, MetricsRecorder, Probe, ProbeRecorder,
 };
+use crate::scene::InitialFlow;
 use crate::sph::StepStats;
 use crate::state::{Restorer, Saver, StateError};
 use crate::{Real, Vec3};
@@ -186,11 +190,29 @@ impl Stage for GridStep {
     }
 }
 
+/// Whether `sim` holds both media, so that each one's files carry its name.
+fn both(sim: &Simulation) -> bool {
+    sim.sph.is_some() && sim.grid.is_some()
+}
+
 /// Probes of an SPH fluid at the start of each step, into `probes.csv`.
 pub struct SphProbes {
-    pub probes: Vec<Probe>,
-    pub file: String,
-    pub recorder: Option<ProbeRecorder>,
+    probes: Vec<Probe>,
+    file: String,
+    recorder: Option<ProbeRecorder>,
+}
+
+impl SphProbes {
+    /// The stage of a run with a fluid and a probe.
+    pub(super) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        Ok((sim.sph.is_some() && !spec.probes.is_empty()).then(|| {
+            Box::new(Self {
+                probes: spec.probes.clone(),
+                file: Kind::Particles.file(PROBES_FILE, both(sim)),
+                recorder: None,
+            }) as Box<dyn Stage>
+        }))
+    }
 }
 
 impl Stage for SphProbes {
@@ -225,11 +247,32 @@ impl Stage for SphProbes {
 
 /// Point and force probes of a grid at the start of each step, into `probes.csv`.
 pub struct GridProbes {
-    pub probes: Vec<Probe>,
+    probes: Vec<Probe>,
     /// The index among the grid's bodies of each obstacle name a force probe may name.
-    pub bodies: Vec<(String, usize)>,
-    pub file: String,
-    pub recorder: Option<GridProbeRecorder>,
+    bodies: Vec<(String, usize)>,
+    file: String,
+    recorder: Option<GridProbeRecorder>,
+}
+
+impl GridProbes {
+    /// The stage of a run with a grid and a probe read every step (line probes are profiles
+    /// written at the end, by the outputs).
+    pub(super) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let per_step: Vec<_> = spec
+            .probes
+            .iter()
+            .filter(|p| !matches!(p, Probe::Line { .. }))
+            .cloned()
+            .collect();
+        Ok((sim.grid.is_some() && !per_step.is_empty()).then(|| {
+            Box::new(Self {
+                probes: per_step,
+                bodies: spec.body_names.clone(),
+                file: Kind::Grid.file(PROBES_FILE, both(sim)),
+                recorder: None,
+            }) as Box<dyn Stage>
+        }))
+    }
 }
 
 impl Stage for GridProbes {
@@ -275,12 +318,28 @@ fn probe_line(file: &str, probes: &[Probe]) -> String {
 /// The SPH row of each step: the state the step started from and what the step did. It runs
 /// after the step and keeps the state it measures for the next row.
 pub struct SphMetrics {
-    pub metrics: Vec<Metric>,
-    pub gravity: Vec3,
-    pub file: String,
-    pub recorder: Option<(MetricsRecorder, StateMetrics)>,
+    metrics: Vec<Metric>,
+    gravity: Vec3,
+    file: String,
+    recorder: Option<(MetricsRecorder, StateMetrics)>,
     /// The other stages' columns of the fluid's metrics.
-    pub added: Vec<AddedColumns>,
+    added: Vec<AddedColumns>,
+}
+
+impl SphMetrics {
+    /// The stage of a run with a fluid and a metric of the fluid asked for.
+    pub(super) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let metrics = Metric::chosen(spec.metrics.as_deref(), &Metric::SPH);
+        Ok((sim.sph.is_some() && !metrics.is_empty()).then(|| {
+            Box::new(Self {
+                metrics,
+                gravity: spec.gravity,
+                file: Kind::Particles.file(METRICS_FILE, both(sim)),
+                recorder: None,
+                added: Vec::new(),
+            }) as Box<dyn Stage>
+        }))
+    }
 }
 
 impl Stage for SphMetrics {
@@ -358,20 +417,42 @@ impl Stage for SphMetrics {
 /// Taylor–Green scene the error of the energy decay.
 pub struct GridMetrics {
     /// Its columns after step, time and dt, in order.
-    pub metrics: Vec<Metric>,
-    pub file: String,
-    pub csv: Option<CsvSeries>,
-    pub taylor_green: Option<TaylorGreenDecay>,
+    metrics: Vec<Metric>,
+    file: String,
+    csv: Option<CsvSeries>,
+    taylor_green: Option<TaylorGreenDecay>,
     /// The other stages' columns of the grid's metrics.
-    pub added: Vec<AddedColumns>,
+    added: Vec<AddedColumns>,
+}
+
+impl GridMetrics {
+    /// The stage of a run with a grid and a metric of the grid asked for.
+    pub(super) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let metrics = Metric::chosen(spec.metrics.as_deref(), &Metric::GRID);
+        let Some(grid) = spec.grid.as_ref().filter(|_| !metrics.is_empty()) else {
+            return Ok(None);
+        };
+        let taylor_green =
+            (grid.initial_flow == Some(InitialFlow::TaylorGreen)).then_some(TaylorGreenDecay {
+                nu: grid.params.viscosity,
+                initial_energy: 0.0,
+            });
+        Ok(Some(Box::new(Self {
+            metrics,
+            file: Kind::Grid.file(METRICS_FILE, both(sim)),
+            csv: None,
+            taylor_green,
+            added: Vec::new(),
+        })))
+    }
 }
 
 /// The Taylor–Green vortex's energy decays as E(t) = E(0) exp(-4 nu t); the column
 /// `taylor_green_error` is |ln(E / E(t))| after each step, with E(0) the grid's own energy of
 /// the initial flow (so the sampling of the flow on the grid is not counted as error).
-pub struct TaylorGreenDecay {
-    pub nu: Real,
-    pub initial_energy: Real,
+struct TaylorGreenDecay {
+    nu: Real,
+    initial_energy: Real,
 }
 
 impl Stage for GridMetrics {

@@ -4,8 +4,10 @@
 //! accumulators live in the [`Simulation`] (`Simulation::statistics`), where the statistics
 //! output and the Python bindings read them.
 
+use super::order::Built;
 use super::outputs::Kind;
 use super::simulation::{Simulation, StepError};
+use super::spec::RunSpec;
 use super::stages::{Stage, StepRecord};
 use super::RunError;
 use crate::metrics::stations::StationSpec;
@@ -47,6 +49,14 @@ pub struct StatisticsStage {
 }
 
 impl StatisticsStage {
+    /// The stage of a run with a `[statistics]` section.
+    pub(super) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let Some(statistics) = &spec.statistics else {
+            return Ok(None);
+        };
+        Ok(Some(Box::new(Self::build(statistics.clone(), sim)?)))
+    }
+
     /// The stage, with an empty accumulator per medium of `sim` put into it: on the grid's
     /// cells, on the bins of `spec.bin` over the domain for an SPH fluid; each with the
     /// stations. A station finer than a lattice is refused.

@@ -1,26 +1,96 @@
 //! The one place that turns a resolved [`Scene`] into the parts' own parameters: the solvers,
-//! the bodies and the refinement never read a scene.
+//! the bodies and the refinement never read a scene, and the pipeline builds a run from the
+//! [`RunSpec`] made here.
 
-use super::Scene;
+use super::{Body, Scene};
 use crate::abl::AblSettings;
 use crate::geometry::{GeometryError, RigidBody};
 use crate::grid::poisson::SolverSettings;
-use crate::grid::{GridError, GridParams, GridSolver, InflowModes};
+use crate::grid::{GridParams, InflowModes};
 use crate::io::{AttrValue, VtkOptions};
 use crate::metrics::stations::StationSpec;
 use crate::metrics::Probe;
 use crate::pipeline::outputs::{LineProbe, OutputSpec};
-use crate::pipeline::StatisticsSpec;
+use crate::pipeline::{GridSpec, RunEnd, RunSpec, SphSpec, StatisticsSpec};
 use crate::sph::SphParams;
 use crate::stepping::StepLimits;
 use crate::{Real, Vec3};
 
-/// The bodies of a scene: the container first, then the obstacles.
+impl Scene {
+    /// The bodies in the order every part numbers them: the container first (body 0, when
+    /// there is one), then the obstacles.
+    pub fn all_bodies(&self) -> impl Iterator<Item = &Body> {
+        self.container.iter().chain(&self.obstacles)
+    }
+
+    /// The obstacles with their index among [`Scene::all_bodies`].
+    pub fn indexed_obstacles(&self) -> impl Iterator<Item = (usize, &Body)> {
+        let first = usize::from(self.container.is_some());
+        self.obstacles
+            .iter()
+            .enumerate()
+            .map(move |(i, b)| (first + i, b))
+    }
+}
+
+/// The run `scene` describes: each part's parameters, the bodies (meshes read here, once),
+/// the stages' settings and the outputs.
+pub fn run_spec(scene: &Scene) -> Result<RunSpec, GeometryError> {
+    let sph = sph_params(scene).map(|params| SphSpec {
+        params,
+        refinement: scene.refinement.clone(),
+        seed: scene.seed,
+    });
+    let grid = scene.grid.as_ref().zip(grid_params(scene));
+    let grid = grid.map(|(g, params)| GridSpec {
+        params,
+        initial_flow: g.initial_flow,
+        static_flow: g.static_flow.clone().map(|p| (p, g.static_flow_frame)),
+    });
+    Ok(RunSpec {
+        name: scene.name.clone(),
+        dir: scene.output.dir.clone(),
+        bodies: bodies(scene)?,
+        container: scene.container.is_some(),
+        shapes: scene.all_bodies().map(|b| b.shape.clone()).collect(),
+        sph,
+        grid,
+        abl: abl_settings(scene),
+        coupling: scene.coupling.clone(),
+        probes: scene.probes.clone(),
+        body_names: scene
+            .indexed_obstacles()
+            .filter_map(|(i, b)| Some((b.name.clone()?, i)))
+            .collect(),
+        metrics: scene.output.metrics.clone(),
+        gravity: Vec3::from(scene.gravity),
+        statistics: statistics_spec(scene),
+        stages: scene.stages.clone(),
+        outputs: output_spec(scene),
+        end: RunEnd {
+            time: scene.time.end,
+            steps: scene.time.steps,
+            steady: scene.grid.as_ref().and_then(|g| g.steady_tolerance),
+        },
+        resolved: scene.to_toml(),
+        checkpoint_key: checkpoint_key(scene),
+    })
+}
+
+/// The scene as a checkpoint compares it: without what a resumed run may change (when it
+/// ends, what it writes).
+pub fn checkpoint_key(scene: &Scene) -> String {
+    let mut s = scene.clone();
+    s.time.end = None;
+    s.time.steps = None;
+    s.output = Default::default();
+    s.to_toml()
+}
+
+/// The bodies of a scene, in the order of [`Scene::all_bodies`].
 pub fn bodies(scene: &Scene) -> Result<Vec<RigidBody>, GeometryError> {
     scene
-        .container
-        .iter()
-        .chain(&scene.obstacles)
+        .all_bodies()
         .enumerate()
         .map(|(i, b)| RigidBody::from_scene(b, i))
         .collect()
@@ -60,18 +130,10 @@ pub fn sph_params(scene: &Scene) -> Option<SphParams> {
 
 /// Per body of [`bodies`]: its `wall_viscosity`, else the scene's `viscosity.boundary`.
 pub fn wall_viscosities(scene: &Scene) -> Vec<Real> {
-    let bodies = scene.container.iter().chain(&scene.obstacles);
-    bodies
+    scene
+        .all_bodies()
         .map(|b| b.wall_viscosity.unwrap_or(scene.viscosity.boundary))
         .collect()
-}
-
-/// Sets the scene's analytic `grid.initial_flow` on a grid built from it (nothing without one).
-pub fn set_initial_flow(scene: &Scene, grid: &mut GridSolver) -> Result<(), GridError> {
-    match scene.grid.as_ref().and_then(|g| g.initial_flow) {
-        Some(flow) => grid.set_velocity(|x| flow.velocity(x)),
-        None => Ok(()),
-    }
 }
 
 /// The MAC grid's parameters, when the scene has a `[grid]`: it covers the scene's domain.

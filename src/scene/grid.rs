@@ -217,8 +217,7 @@ impl Scene {
                     "an existing grid frames file (frames.h5 of a run with output.hdf5 = true)",
                 ));
             }
-            let all = self.container.iter().chain(&self.obstacles);
-            if let Some(b) = all.into_iter().find(|b| b.motion != Default::default()) {
+            if let Some(b) = self.all_bodies().find(|b| b.motion != Default::default()) {
                 return Err(c.invalid(
                     "grid.static_flow",
                     path.display(),

@@ -75,6 +75,10 @@ pub struct Scene {
     /// and enstrophy), written as `statistics.h5` at every frame time; none when left out.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub statistics: Option<Statistics>,
+    /// Further stages of a step, by the names they were registered with from outside eddy
+    /// (`eddy::pipeline::register_stage`); none by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stages: Vec<String>,
     /// What is written, and where.
     #[serde(default)]
     pub output: Output,

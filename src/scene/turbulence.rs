@@ -10,12 +10,7 @@ use crate::Real;
 impl Scene {
     /// The obstacles with a database, with their index among the bodies (container first).
     pub fn abl_obstacles(&self) -> impl Iterator<Item = (usize, &Body)> {
-        let first = usize::from(self.container.is_some());
-        self.obstacles
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| b.abl.is_some())
-            .map(move |(i, b)| (first + i, b))
+        self.indexed_obstacles().filter(|(_, b)| b.abl.is_some())
     }
 
     /// |U_0| of Eq. 8: `turbulence.u0`, else the fastest inflow side, else the fastest surface

@@ -9,18 +9,16 @@
 //! 2017, Algorithm 1.
 
 use super::boundary::BoundaryParticles;
-use super::cg;
-use super::dfsph::{self, Bounds, Solve, SolveResult};
+use super::dfsph::SolveResult;
 use super::energy_bound::EnergyBound;
 use super::fluid::FluidParticles;
 use super::forces;
-use super::hooks::{StepContext, StepHook};
-use super::iisph;
+use super::hooks::StepHook;
 use super::kernel::CubicSpline;
 use super::lost::{self, LostParticles};
 use super::neighborhood::Neighborhood;
 use super::neighbors::{cell_order_and_codes, CellGrid, NeighborLists};
-use super::open::{Exchange, OpenBoundaries};
+use super::open::OpenBoundaries;
 use super::operators::{self, Operators, WallField};
 use super::pair_cache::{Densities, PairCache};
 use super::params::{DomainSide, PressureSolverKind, SphParams};
@@ -29,9 +27,9 @@ use crate::geometry::RigidBody;
 use crate::stepping::{towards_end, StepLimits};
 use crate::{Point3, Real, Vec3};
 use rayon::prelude::*;
-use std::time::Instant;
 
 mod persist;
+mod step;
 
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -420,211 +418,6 @@ impl SphSolver {
         )?;
         self.pending_accel = Some(accel);
         Ok(dt)
-    }
-
-    /// Advances by `dt` from the state of the last [`Self::update_neighborhoods`]; `dt` should
-    /// not exceed [`Self::stable_dt`].
-    pub fn advance(&mut self, dt: Real) -> Result<StepStats, Instability> {
-        let mut accel = match self.pending_accel.take() {
-            Some(accel) => accel,
-            None => self.non_pressure_accelerations(),
-        };
-        let step_start = Instant::now();
-        let mut stats = StepStats::default();
-        let energy_bound = self.energy.bound(|| max_speed(&self.fluid.v));
-        // r(t) and r(t + dt): the inflow buffers' share of their velocity at both ends.
-        let (r0, r1) = (
-            self.ramp.factor(self.time),
-            self.ramp.factor(self.time + dt),
-        );
-        let ramp = self.ramp.increment(self.time, dt);
-        let parts = self.parts();
-        let runs = |part| parts.contains(&part);
-        let ran = &mut self.ran;
-        ran.clear();
-        let FluidParticles {
-            x,
-            v,
-            density,
-            pressure,
-            kappa,
-            kappa_v,
-            mass,
-            rest_density,
-            ..
-        } = &mut self.fluid;
-        let rho0 = *rest_density;
-        let nb = Neighborhood {
-            kernel: &self.kernel,
-            x,
-            fluid: &self.fluid_lists,
-            boundary_lists: &self.boundary_lists,
-            boundary: &self.boundary,
-            volume: *mass / rho0,
-            pairs: &self.pairs,
-        };
-        let settings = &self.params.pressure;
-        let dfsph = settings.solver == PressureSolverKind::Dfsph;
-        // The signed solve's roles and the stiffness it holds at the outflows (as k dt^2).
-        let signed = (dfsph && settings.signed).then(|| {
-            (
-                cg::roles(&nb, &self.open),
-                settings.ambient / rho0 * dt * dt,
-            )
-        });
-        let (ratio, factor) = (&self.density_ratio, &self.factor);
-        let dfsph_solve =
-            |which, v: &mut [Vec3], warm: &mut [Real], bounds, second_order| match &signed {
-                Some((roles, held)) => cg::solve(
-                    &nb,
-                    which,
-                    roles,
-                    *held,
-                    ratio,
-                    factor,
-                    v,
-                    warm,
-                    dt,
-                    bounds,
-                    second_order,
-                ),
-                None => dfsph::solve(&nb, which, ratio, factor, v, warm, dt, bounds, second_order),
-            };
-        let bounds = |tolerance, min_iterations| Bounds {
-            tolerance,
-            min_iterations,
-            max_iterations: settings.max_iterations,
-        };
-        stats.dt = dt;
-        let start = Instant::now();
-        self.open.impose(x, v, r0);
-        stats.open_seconds = start.elapsed().as_secs_f64();
-        // The warm starts read kappa dt^2 of the last step; a pressure that holds the fluid
-        // against gravity keeps kappa, not kappa dt^2, when the step changes (the last steps
-        // before the end time are up to halved), so carry kappa over.
-        if let Some(last) = self.last_dt.filter(|&last| last != dt) {
-            let scale = (dt / last).powi(2);
-            kappa.par_iter_mut().for_each(|k| *k *= scale);
-            kappa_v.par_iter_mut().for_each(|k| *k *= scale);
-        }
-        self.last_dt = Some(dt);
-        if runs(Part::Divergence) {
-            let start = Instant::now();
-            stats.divergence = dfsph_solve(
-                Solve::Divergence,
-                v,
-                kappa_v,
-                bounds(
-                    settings.divergence_tolerance,
-                    settings.divergence_min_iterations(),
-                ),
-                false,
-            );
-            stats.divergence_seconds = start.elapsed().as_secs_f64();
-            ran.push(Part::Divergence.name());
-        }
-        let viscosity = &self.params.viscosity;
-        let hook_ctx = |volume, walls| StepContext {
-            ops: Operators { nb, volume, walls },
-            dt,
-            nu: viscosity.kinematic,
-            spacing: self.spacing,
-        };
-        let volume = &mut self.refine_volume;
-        if runs(Part::Hooks) {
-            let start = Instant::now();
-            operators::volumes_into(*mass, density, volume);
-            for hook in &mut self.hooks {
-                hook.before_advection(&hook_ctx(volume, hook.walls()), v, &mut accel);
-                ran.push(hook.name());
-            }
-            stats.refinement_seconds += start.elapsed().as_secs_f64();
-        }
-        ran.push(Part::Forces.name());
-        v.par_iter_mut()
-            .zip(accel.par_iter())
-            .for_each(|(v, a)| *v += dt * a);
-        if let Some(dv) = ramp {
-            v.par_iter_mut().for_each(|v| *v += dv);
-        }
-        if viscosity.xsph > 0.0 {
-            forces::xsph(&nb, density, rho0, v, viscosity.xsph);
-        }
-        let pressure_bounds = bounds(settings.density_tolerance, settings.min_iterations);
-        let start = Instant::now();
-        ran.push(Part::Pressure.name());
-        stats.pressure = if dfsph {
-            dfsph_solve(
-                Solve::Density,
-                v,
-                kappa,
-                pressure_bounds,
-                settings.second_order,
-            )
-        } else {
-            iisph::solve(
-                &nb,
-                &self.density_ratio,
-                &self.factor,
-                v,
-                kappa,
-                dt,
-                pressure_bounds,
-            )
-        };
-        stats.pressure_seconds = start.elapsed().as_secs_f64();
-        if runs(Part::Hooks) {
-            let start = Instant::now();
-            for hook in &mut self.hooks {
-                hook.after_pressure(&hook_ctx(volume, hook.walls()), v);
-            }
-            stats.refinement_seconds += start.elapsed().as_secs_f64();
-        }
-        let start = Instant::now();
-        self.open.impose(x, v, r1);
-        stats.open_seconds += start.elapsed().as_secs_f64();
-        // p = kappa rho^2 / rho_0, with kappa the step's total stiffness (stored as kappa dt^2):
-        // the divergence solve's and the density solve's, both pressure impulses of this step.
-        pressure
-            .par_iter_mut()
-            .zip(kappa.par_iter().zip(kappa_v.par_iter()))
-            .zip(density.par_iter())
-            .for_each(|((p, (k, kv)), rho)| *p = (k + kv) / (dt * dt) * rho * rho / rho0);
-        x.par_iter_mut()
-            .zip(v.par_iter())
-            .for_each(|(x, v)| *x += dt * v);
-        ran.push(Part::Advect.name());
-        self.time += dt;
-        self.step += 1;
-        let start = Instant::now();
-        let mut change = self.open.exchange(x, dt, r1);
-        if runs(Part::OpenBoundaries) {
-            ran.push(Part::OpenBoundaries.name());
-        }
-        let left = self.leaving(change.as_ref().map(|c| &c.keep[..]))?;
-        if !left.is_empty() {
-            let n = self.fluid.len();
-            let change = change.get_or_insert_with(|| Exchange {
-                keep: vec![true; n],
-                added: Vec::new(),
-            });
-            for &(i, side) in &left {
-                self.lose(i, side);
-                change.keep[i] = false;
-            }
-        }
-        if let Some(change) = change {
-            self.fluid.exchange(&change.keep, &change.added);
-            for hook in &mut self.hooks {
-                hook.resize(&change.keep, change.added.len());
-            }
-        }
-        stats.open_seconds += start.elapsed().as_secs_f64();
-        stats.step_seconds = step_start.elapsed().as_secs_f64();
-        stats.lost = self.lost.total();
-        self.check_losses()?;
-        self.check_energy(energy_bound)?;
-        Ok(stats)
     }
 
     /// Fluid particles lost through open sides of the domain so far.

@@ -24,8 +24,10 @@ use crate::abl::{AblSettings, Seeding};
 use crate::grid::advect::{advect_band_into, Band};
 use crate::grid::walls::{boundary_cells, mean_velocity, shell_cells, wall_distance};
 use crate::grid::{Advection, GridSolver};
+use crate::pipeline::order::Built;
 use crate::pipeline::outputs::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
+use crate::pipeline::spec::RunSpec;
 use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;
 use crate::vortex::{synthesize, synthesize_refined, VortexParticles};
@@ -108,6 +110,16 @@ pub struct GridTurbulence {
 }
 
 impl GridTurbulence {
+    /// The stage of a run with a grid and an obstacle with a database.
+    pub(in crate::pipeline) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let (Some(settings), Some(grid)) = (&spec.abl, &spec.grid) else {
+            return Ok(None);
+        };
+        let scheme = grid.params.advection;
+        let stage = Self::build(settings.clone(), sim, &spec.shapes, scheme)?;
+        Ok(Some(Box::new(stage)))
+    }
+
     /// Opens every database (checking it belongs to its obstacle) and builds the empty state
     /// into `sim`.
     pub fn build(
@@ -244,9 +256,9 @@ impl Stage for GridTurbulence {
                 (
                     ABL_ADVECTION,
                     format!(
-                        "omega_ABL by {:?} over the band its nonzero cells can reach, zero in \
+                        "omega_ABL by {} over the band its nonzero cells can reach, zero in \
                          obstacles, flushed below {FLUSH:e} of its peak",
-                        self.scheme
+                        self.scheme.label()
                     ),
                 ),
                 (SEEDING, seeding),

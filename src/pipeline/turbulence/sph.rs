@@ -34,8 +34,10 @@ use super::{
 use crate::abl::params::LAYER_SPACINGS;
 use crate::abl::seeding::{scatter, seed, SeedSamples};
 use crate::abl::{AblSettings, Seeding};
+use crate::pipeline::order::Built;
 use crate::pipeline::outputs::Kind;
 use crate::pipeline::simulation::{Simulation, StepError};
+use crate::pipeline::spec::RunSpec;
 use crate::pipeline::stages::{AddedColumns, Stage, StepRecord};
 use crate::pipeline::RunError;
 use crate::spatial::PointHash;
@@ -63,6 +65,21 @@ pub struct SphTurbulence {
 }
 
 impl SphTurbulence {
+    /// The stage of a run with a fluid and an obstacle with a database, unless a grid beside
+    /// the fluid takes the turbulence (an uncoupled scene with both drives the grid; a coupled
+    /// one seeds and synthesises in each medium).
+    pub(in crate::pipeline) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
+        let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
+        let coupled = spec.coupling.is_some() && has_sph && has_grid;
+        match &spec.abl {
+            Some(settings) if has_sph && (coupled || !has_grid) => {
+                let stage = Self::build(settings.clone(), sim, &spec.shapes)?;
+                Ok(Some(Box::new(stage)))
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// Opens every database (checking it belongs to its obstacle), adds the carried field to
     /// the fluid and builds the empty state into `sim`.
     pub fn build(

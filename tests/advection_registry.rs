@@ -2,6 +2,8 @@
 //! nothing) is named by a scene, listed by the scene reference, labelled in the plan and called
 //! by the grid's step like the built-in ones, with no other change anywhere.
 
+mod common;
+
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Once;
@@ -181,19 +183,7 @@ fn a_taken_name_is_refused() {
 /// registry's table under its file's name: a new scheme cannot be left out of it.
 #[test]
 fn every_scheme_file_is_in_the_table() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/grid/advect");
-    let mut declared: Vec<String> = std::fs::read_dir(&dir)
-        .expect("src/grid/advect")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| std::fs::read_to_string(p).is_ok_and(|s| s.contains("static SCHEME: Scheme")))
-        .map(|p| {
-            p.file_stem()
-                .expect("a file")
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    declared.sort();
+    let declared = common::files_declaring("grid/advect", "static SCHEME: Scheme");
     let mut built_in: Vec<&str> = advect::BUILT_IN.iter().map(|s| s.name).collect();
     built_in.sort();
     assert_eq!(declared, built_in);

@@ -2,6 +2,8 @@
 //! kick) is read from a scene, validated, planned and run inside the SPH step like the built-in
 //! ones, with no other change anywhere.
 
+mod common;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use eddy::pipeline::{Pipeline, Plan};
@@ -160,21 +162,7 @@ fn a_taken_name_is_refused() {
 /// table under its file's name: a new method cannot be left out of it.
 #[test]
 fn every_method_file_is_in_the_table() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/refine");
-    let mut declared: Vec<String> = std::fs::read_dir(&dir)
-        .expect("src/refine")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| {
-            std::fs::read_to_string(p).is_ok_and(|s| s.contains("pub const METHOD: Method"))
-        })
-        .map(|p| {
-            p.file_stem()
-                .expect("a file")
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    declared.sort();
+    let declared = common::files_declaring("refine", "pub const METHOD: Method");
     let mut built_in: Vec<String> = registry::BUILT_IN
         .iter()
         .map(|m| m.name.to_owned())

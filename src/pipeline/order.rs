@@ -165,7 +165,7 @@ pub fn stages(
         }
     }
     let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
-    let coupling = spec.coupling.clone().filter(|_| has_sph && has_grid);
+    let coupling = spec.coupling.clone().filter(|_| sim.both_media());
     let (kind, order) = match (coupling, has_sph, has_grid) {
         (Some(coupling), _, _) => (SceneKind::Coupled, coupled(SurfaceExchange { coupling })),
         (None, true, true) => (SceneKind::SideBySide, side_by_side()),

@@ -63,6 +63,11 @@ impl Simulation {
         }
     }
 
+    /// Whether it holds both a fluid and a grid: each medium's files then carry its name.
+    pub fn both_media(&self) -> bool {
+        self.sph.is_some() && self.grid.is_some()
+    }
+
     /// Simulated time, s.
     pub fn time(&self) -> Real {
         self.time

@@ -190,11 +190,6 @@ impl Stage for GridStep {
     }
 }
 
-/// Whether `sim` holds both media, so that each one's files carry its name.
-fn both(sim: &Simulation) -> bool {
-    sim.sph.is_some() && sim.grid.is_some()
-}
-
 /// Probes of an SPH fluid at the start of each step, into `probes.csv`.
 pub struct SphProbes {
     probes: Vec<Probe>,
@@ -208,7 +203,7 @@ impl SphProbes {
         Ok((sim.sph.is_some() && !spec.probes.is_empty()).then(|| {
             Box::new(Self {
                 probes: spec.probes.clone(),
-                file: Kind::Particles.file(PROBES_FILE, both(sim)),
+                file: Kind::Particles.file(PROBES_FILE, sim.both_media()),
                 recorder: None,
             }) as Box<dyn Stage>
         }))
@@ -268,7 +263,7 @@ impl GridProbes {
             Box::new(Self {
                 probes: per_step,
                 bodies: spec.body_names.clone(),
-                file: Kind::Grid.file(PROBES_FILE, both(sim)),
+                file: Kind::Grid.file(PROBES_FILE, sim.both_media()),
                 recorder: None,
             }) as Box<dyn Stage>
         }))
@@ -334,7 +329,7 @@ impl SphMetrics {
             Box::new(Self {
                 metrics,
                 gravity: spec.gravity,
-                file: Kind::Particles.file(METRICS_FILE, both(sim)),
+                file: Kind::Particles.file(METRICS_FILE, sim.both_media()),
                 recorder: None,
                 added: Vec::new(),
             }) as Box<dyn Stage>
@@ -439,7 +434,7 @@ impl GridMetrics {
             });
         Ok(Some(Box::new(Self {
             metrics,
-            file: Kind::Grid.file(METRICS_FILE, both(sim)),
+            file: Kind::Grid.file(METRICS_FILE, sim.both_media()),
             csv: None,
             taylor_green,
             added: Vec::new(),

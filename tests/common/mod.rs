@@ -191,3 +191,26 @@ pub fn step_divergence_free(g: &mut eddy::grid::GridSolver) {
         "divergence {div:.3e} at |u| {umax}"
     );
 }
+
+/// The names of the files of `src/FOLDER` whose text holds `marker` (the declaration each
+/// entry of a registry's table makes), sorted: what the table must list, so that an entry's
+/// file cannot be left out of it.
+#[allow(dead_code)]
+pub fn files_declaring(folder: &str, marker: &str) -> Vec<String> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("src")
+        .join(folder);
+    let mut declared: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("entry").path())
+        .filter(|p| std::fs::read_to_string(p).is_ok_and(|s| s.contains(marker)))
+        .map(|p| {
+            p.file_stem()
+                .expect("a file")
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    declared.sort();
+    declared
+}

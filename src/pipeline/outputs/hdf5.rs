@@ -59,7 +59,7 @@ pub(super) fn build(spec: &OutputSpec, sim: &Simulation) -> Option<Box<dyn Outpu
         level,
         interval: spec.interval,
         attrs: spec.attrs.clone(),
-        both: sim.sph.is_some() && sim.grid.is_some(),
+        both: sim.both_media(),
         particles: None,
         grid: None,
         fine_smoke: None,

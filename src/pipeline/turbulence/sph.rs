@@ -70,7 +70,7 @@ impl SphTurbulence {
     /// one seeds and synthesises in each medium).
     pub(in crate::pipeline) fn stage(spec: &RunSpec, sim: &mut Simulation) -> Built {
         let (has_sph, has_grid) = (sim.sph.is_some(), sim.grid.is_some());
-        let coupled = spec.coupling.is_some() && has_sph && has_grid;
+        let coupled = spec.coupling.is_some() && sim.both_media();
         match &spec.abl {
             Some(settings) if has_sph && (coupled || !has_grid) => {
                 let stage = Self::build(settings.clone(), sim, &spec.shapes)?;
